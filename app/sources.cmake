@@ -1,0 +1,1 @@
+target_sources(modestack PRIVATE ${CMAKE_CURRENT_LIST_DIR}/main.cpp)

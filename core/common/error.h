@@ -1,0 +1,54 @@
+// The one exception type of modestack. It is thrown where a problem is found and
+// caught once in main(), which prints `modestack: <what()>` and exits with
+// exit_code(kind). It carries the file, frame and channel the problem is about so
+// that the message names them; what() is always a single line.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace modestack {
+
+/// What kind of failure, and so which exit code (documented in modestack(1)).
+enum class ErrorKind {
+    BadInput = 1,  ///< bad or missing input file, unwritable output, failed run
+    Usage = 2,     ///< bad command line: unknown option, value out of range
+    Internal = 3,  ///< a bug: an invariant that should never break
+};
+
+/// Marks "no frame number" in Error::frame().
+inline constexpr int kNoFrame = -2147483647 - 1;
+
+/// An error a user can act on: a one-line reason, plus where it happened.
+class Error : public std::runtime_error {
+public:
+    /// `reason` says what is wrong and, where it helps, what to do; `file`,
+    /// `frame` and `channel` are optional context that what() prefixes.
+    Error(ErrorKind kind, const std::string& reason, const std::string& file = {},
+          int frame = kNoFrame, const std::string& channel = {});
+
+    ErrorKind kind() const { return m_kind; }
+    const std::string& reason() const { return m_reason; }
+    const std::string& file() const { return m_file; }
+    int frame() const { return m_frame; }
+    const std::string& channel() const { return m_channel; }
+
+private:
+    ErrorKind m_kind;
+    std::string m_reason;
+    std::string m_file;
+    int m_frame;
+    std::string m_channel;
+};
+
+/// Error about an input or output file (exit code 1).
+Error bad_input(const std::string& file, const std::string& reason);
+/// Error about the command line (exit code 2).
+Error usage_error(const std::string& reason);
+/// Error for a broken internal invariant (exit code 3).
+Error internal_error(const std::string& reason);
+
+/// The process exit code for an error kind.
+inline int exit_code(ErrorKind kind) { return static_cast<int>(kind); }
+
+}  // namespace modestack

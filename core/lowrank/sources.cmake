@@ -1,0 +1,1 @@
+# Sources of core/lowrank (one .h/.cpp pair per concept).

@@ -1,0 +1,1 @@
+# Sources of core/scene (one .h/.cpp pair per concept).

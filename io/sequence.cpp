@@ -1,0 +1,180 @@
+#include "io/sequence.h"
+
+#include "core/common/error.h"
+
+#include <OpenImageIO/filesystem.h>
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <set>
+
+namespace modestack::io {
+namespace {
+
+namespace fs = OIIO::Filesystem;
+
+// OIIO reads each '#' as four digits; a run of N > 1 '#' means N digits to
+// every other tool, so rewrite such runs as '@' (one digit each) first.
+std::string runs_of_hash_to_at(const std::string& pattern)
+{
+    std::string out;
+    for (size_t i = 0; i < pattern.size();) {
+        size_t run = 0;
+        while (i + run < pattern.size() && pattern[i + run] == '#')
+            ++run;
+        if (run > 1) {
+            out.append(run, '@');
+            i += run;
+        } else {
+            out.push_back(pattern[i++]);
+        }
+    }
+    return out;
+}
+
+bool has_frame_token(const std::string& pattern)
+{
+    if (pattern.find_first_of("#@") != std::string::npos)
+        return true;
+    size_t percent = pattern.find('%');
+    return percent != std::string::npos && pattern.find('d', percent) != std::string::npos;
+}
+
+std::string format_frame(const std::string& printf_pattern, int frame)
+{
+    std::vector<std::string> files;
+    if (!fs::enumerate_file_sequence(printf_pattern, {frame}, files) || files.size() != 1)
+        throw usage_error(fmt::format("cannot make a file name from pattern '{}'", printf_pattern));
+    return files.front();
+}
+
+}  // namespace
+
+std::vector<int> parse_frame_range(const std::string& spec, const std::string& option)
+{
+    std::vector<int> frames;
+    if (spec.empty() || !fs::enumerate_sequence(spec, frames) || frames.empty())
+        throw usage_error(fmt::format("{} '{}': not a frame range (examples: 1-48, 1001-1100, 1-100x2, 1,3,7-9)",
+                                      option, spec));
+    std::set<int> seen;
+    for (int frame : frames)
+        if (!seen.insert(frame).second)
+            throw usage_error(fmt::format("{} '{}': frame {} is listed twice", option, spec, frame));
+    return frames;
+}
+
+bool normalize_pattern(const std::string& pattern, std::string& printf_pattern, std::string& embedded_range)
+{
+    printf_pattern.clear();
+    embedded_range.clear();
+    if (!has_frame_token(pattern))
+        return false;
+    return fs::parse_pattern(runs_of_hash_to_at(pattern).c_str(), 0, printf_pattern, embedded_range) &&
+           !printf_pattern.empty();
+}
+
+FrameSequence find_input_sequence(const std::string& pattern, const std::string& frame_range)
+{
+    FrameSequence sequence;
+    sequence.pattern = pattern;
+    std::string embedded;
+    if (!normalize_pattern(pattern, sequence.printf_pattern, embedded))
+        throw usage_error(fmt::format("'{}' is not a frame-sequence pattern (write name.####.exr, name.%04d.exr "
+                                      "or name.@.exr)",
+                                      pattern));
+    std::string range = frame_range.empty() ? embedded : frame_range;
+
+    if (!range.empty()) {
+        sequence.frames = parse_frame_range(range);
+        for (int frame : sequence.frames) {
+            std::string file = format_frame(sequence.printf_pattern, frame);
+            if (!fs::exists(file))
+                throw Error(ErrorKind::BadInput, fmt::format("frame {} is missing", frame), file, frame);
+            if (fs::is_directory(file))
+                throw Error(ErrorKind::BadInput, "is a directory, not an image file", file, frame);
+            sequence.files.push_back(file);
+        }
+        return sequence;
+    }
+
+    std::string directory = fs::parent_path(sequence.printf_pattern);
+    if (!directory.empty() && !fs::is_directory(directory))
+        throw bad_input(directory, "directory does not exist");
+    std::vector<int> frames;
+    std::vector<std::string> files;
+    if (!fs::scan_for_matching_filenames(sequence.printf_pattern, frames, files) || frames.empty())
+        throw bad_input(pattern, "no frames found on disk");
+    // Keep the file name of each number as the pattern writes it (padding matters).
+    std::vector<std::pair<int, std::string>> found;
+    for (size_t i = 0; i < frames.size(); ++i)
+        if (files[i] == format_frame(sequence.printf_pattern, frames[i]))
+            found.emplace_back(frames[i], files[i]);
+    if (found.empty())
+        throw bad_input(pattern, "no frames found on disk");
+    std::sort(found.begin(), found.end());
+    std::vector<int> gaps;
+    for (size_t i = 1; i < found.size(); ++i)
+        for (int missing = found[i - 1].first + 1; missing < found[i].first; ++missing)
+            gaps.push_back(missing);
+    if (!gaps.empty())
+        throw bad_input(pattern, fmt::format("frames {} are missing between {} and {} (use --frames to choose the "
+                                             "frames wanted)",
+                                             describe_frames(gaps), found.front().first, found.back().first));
+    for (auto& [frame, file] : found) {
+        if (fs::is_directory(file))
+            throw Error(ErrorKind::BadInput, "is a directory, not an image file", file, frame);
+        sequence.frames.push_back(frame);
+        sequence.files.push_back(file);
+    }
+    return sequence;
+}
+
+FrameSequence output_sequence(const std::string& pattern, const std::vector<int>& frames)
+{
+    FrameSequence sequence;
+    sequence.pattern = pattern;
+    sequence.frames = frames;
+    std::string embedded;
+    if (!normalize_pattern(pattern, sequence.printf_pattern, embedded)) {
+        if (frames.size() > 1)
+            throw usage_error(fmt::format("output '{}' has no frame token (write name.####.exr)", pattern));
+        sequence.printf_pattern = pattern;
+        sequence.files.assign(frames.size(), pattern);
+        return sequence;
+    }
+    if (!embedded.empty())
+        throw usage_error(fmt::format("output pattern '{}' must not contain a frame range", pattern));
+    for (int frame : frames)
+        sequence.files.push_back(format_frame(sequence.printf_pattern, frame));
+    return sequence;
+}
+
+std::string describe_frames(const std::vector<int>& frames)
+{
+    std::string text;
+    size_t i = 0;
+    while (i < frames.size()) {
+        // Longest run with a constant positive step starting at i.
+        size_t j = i + 1;
+        int step = j < frames.size() ? frames[j] - frames[i] : 1;
+        if (step <= 0)
+            step = 1;
+        while (j < frames.size() && frames[j] - frames[j - 1] == step)
+            ++j;
+        if (!text.empty())
+            text += ",";
+        size_t count = j - i;
+        if (count >= 3 || (count == 2 && step == 1)) {
+            text += fmt::format("{}-{}", frames[i], frames[j - 1]);
+            if (step != 1)
+                text += fmt::format("x{}", step);
+            i = j;
+        } else {
+            text += std::to_string(frames[i]);
+            ++i;
+        }
+    }
+    return text;
+}
+
+}  // namespace modestack::io

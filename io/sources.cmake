@@ -1,0 +1,2 @@
+target_sources(modestack_io PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/sequence.cpp)
