@@ -50,6 +50,15 @@ std::string format_frame(const std::string& printf_pattern, int frame)
 
 }  // namespace
 
+// Normalizes an input pattern, or throws a usage error saying how to write one.
+static void require_frame_token(const std::string& pattern, std::string& printf_pattern, std::string& embedded)
+{
+    if (!normalize_pattern(pattern, printf_pattern, embedded))
+        throw usage_error(fmt::format("'{}' is not a frame-sequence pattern (write name.####.exr, name.%04d.exr "
+                                      "or name.@.exr)",
+                                      pattern));
+}
+
 std::vector<int> parse_frame_range(const std::string& spec, const std::string& option)
 {
     std::vector<int> frames;
@@ -78,10 +87,7 @@ FrameSequence find_input_sequence(const std::string& pattern, const std::string&
     FrameSequence sequence;
     sequence.pattern = pattern;
     std::string embedded;
-    if (!normalize_pattern(pattern, sequence.printf_pattern, embedded))
-        throw usage_error(fmt::format("'{}' is not a frame-sequence pattern (write name.####.exr, name.%04d.exr "
-                                      "or name.@.exr)",
-                                      pattern));
+    require_frame_token(pattern, sequence.printf_pattern, embedded);
     std::string range = frame_range.empty() ? embedded : frame_range;
 
     if (!range.empty()) {
@@ -97,14 +103,28 @@ FrameSequence find_input_sequence(const std::string& pattern, const std::string&
         return sequence;
     }
 
+    FrameSequence found = scan_input_sequence(pattern);
+    std::vector<int> gaps = missing_frames(found.frames);
+    if (!gaps.empty())
+        throw bad_input(pattern, fmt::format("frames {} are missing between {} and {} (use --frames to choose the "
+                                             "frames wanted)",
+                                             describe_frames(gaps), found.frames.front(), found.frames.back()));
+    return found;
+}
+
+FrameSequence scan_input_sequence(const std::string& pattern)
+{
+    FrameSequence sequence;
+    sequence.pattern = pattern;
+    std::string embedded;
+    require_frame_token(pattern, sequence.printf_pattern, embedded);
     std::string directory = fs::parent_path(sequence.printf_pattern);
     if (!directory.empty() && !fs::is_directory(directory))
         throw bad_input(directory, "directory does not exist");
     std::vector<int> frames;
     std::vector<std::string> files;
-    if (!fs::scan_for_matching_filenames(sequence.printf_pattern, frames, files) || frames.empty())
-        throw bad_input(pattern, "no frames found on disk");
-    // Keep the file name of each number as the pattern writes it (padding matters).
+    fs::scan_for_matching_filenames(sequence.printf_pattern, frames, files);
+    // Keep only names written exactly as the pattern writes them (padding matters).
     std::vector<std::pair<int, std::string>> found;
     for (size_t i = 0; i < frames.size(); ++i)
         if (files[i] == format_frame(sequence.printf_pattern, frames[i]))
@@ -112,21 +132,20 @@ FrameSequence find_input_sequence(const std::string& pattern, const std::string&
     if (found.empty())
         throw bad_input(pattern, "no frames found on disk");
     std::sort(found.begin(), found.end());
-    std::vector<int> gaps;
-    for (size_t i = 1; i < found.size(); ++i)
-        for (int missing = found[i - 1].first + 1; missing < found[i].first; ++missing)
-            gaps.push_back(missing);
-    if (!gaps.empty())
-        throw bad_input(pattern, fmt::format("frames {} are missing between {} and {} (use --frames to choose the "
-                                             "frames wanted)",
-                                             describe_frames(gaps), found.front().first, found.back().first));
     for (auto& [frame, file] : found) {
-        if (fs::is_directory(file))
-            throw Error(ErrorKind::BadInput, "is a directory, not an image file", file, frame);
         sequence.frames.push_back(frame);
         sequence.files.push_back(file);
     }
     return sequence;
+}
+
+std::vector<int> missing_frames(const std::vector<int>& frames)
+{
+    std::vector<int> gaps;
+    for (size_t i = 1; i < frames.size(); ++i)
+        for (int missing = frames[i - 1] + 1; missing < frames[i]; ++missing)
+            gaps.push_back(missing);
+    return gaps;
 }
 
 FrameSequence output_sequence(const std::string& pattern, const std::vector<int>& frames)

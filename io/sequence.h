@@ -29,6 +29,13 @@ std::vector<int> parse_frame_range(const std::string& spec, const std::string& o
 bool normalize_pattern(const std::string& pattern, std::string& printf_pattern,
                        std::string& embedded_range);
 
+/// The frames of a sequence found on disk, in ascending order, gaps allowed.
+/// Throws Error (bad input) when the directory is missing or nothing matches.
+FrameSequence scan_input_sequence(const std::string& pattern);
+
+/// The frame numbers missing between the first and last frame of `frames` (ascending).
+std::vector<int> missing_frames(const std::vector<int>& frames);
+
 /// Resolves an input sequence. With a non-empty `frame_range` (or a range inside
 /// the pattern) exactly those frames are used and each must exist; otherwise
 /// the directory is scanned and a gap between the first and last frame found is

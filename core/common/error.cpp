@@ -40,6 +40,8 @@ Error bad_input(const std::string& file, const std::string& reason)
 
 Error usage_error(const std::string& reason) { return Error(ErrorKind::Usage, reason); }
 
+Error cancelled_error() { return Error(ErrorKind::Cancelled, "interrupted; no output was left half-written"); }
+
 Error internal_error(const std::string& reason)
 {
     return Error(ErrorKind::Internal, "internal error: " + reason);

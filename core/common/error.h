@@ -14,6 +14,7 @@ enum class ErrorKind {
     BadInput = 1,  ///< bad or missing input file, unwritable output, failed run
     Usage = 2,     ///< bad command line: unknown option, value out of range
     Internal = 3,  ///< a bug: an invariant that should never break
+    Cancelled = 4, ///< stopped by SIGINT/SIGTERM; main exits with 128 + signal
 };
 
 /// Marks "no frame number" in Error::frame().
@@ -48,7 +49,10 @@ Error usage_error(const std::string& reason);
 /// Error for a broken internal invariant (exit code 3).
 Error internal_error(const std::string& reason);
 
-/// The process exit code for an error kind.
-inline int exit_code(ErrorKind kind) { return static_cast<int>(kind); }
+/// Error for work stopped by a cancel request (see core/common/progress.h).
+Error cancelled_error();
+
+/// The process exit code for an error kind (Cancelled: 130, main refines it by signal).
+inline int exit_code(ErrorKind kind) { return kind == ErrorKind::Cancelled ? 130 : static_cast<int>(kind); }
 
 }  // namespace modestack

@@ -1,5 +1,7 @@
 #include "core/common/progress.h"
 
+#include "core/common/error.h"
+
 #include <algorithm>
 
 namespace modestack {
@@ -83,6 +85,11 @@ void Progress::draw(std::int64_t done, bool final_line)
 
 void request_cancel() { g_cancel.store(true); }
 bool cancel_requested() { return g_cancel.load(std::memory_order_relaxed); }
+void throw_if_cancelled()
+{
+    if (cancel_requested())
+        throw cancelled_error();
+}
 int cancel_signal() { return g_cancel_signal.load(); }
 void request_cancel_by_signal(int signal_number)
 {

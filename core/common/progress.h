@@ -50,6 +50,8 @@ private:
 void request_cancel();
 /// True once request_cancel() was called.
 bool cancel_requested();
+/// Throws cancelled_error() when a cancel was requested; call between work units.
+void throw_if_cancelled();
 /// Signal number that caused the cancel request, or 0.
 int cancel_signal();
 /// Records the signal that asked to cancel (async-signal-safe).

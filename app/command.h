@@ -1,0 +1,27 @@
+// How a subcommand plugs into `modestack`: it adds its options to a CLI11
+// sub-app and returns the function main() runs after parsing. Each subcommand
+// lives in its own cmd_<name>.cpp and only calls into core/ and io/.
+#pragma once
+
+#include <CLI/CLI.hpp>
+
+#include <functional>
+#include <memory>
+#include <string>
+
+namespace modestack::app {
+
+/// A registered subcommand.
+struct Subcommand {
+    CLI::App* cli = nullptr;      ///< its CLI11 sub-app (for "was it chosen?")
+    std::function<int()> run;     ///< runs it; returns the exit code
+};
+
+/// The whole command line as typed, for provenance attributes and JSON.
+const std::string& command_line();
+/// Records the command line (main calls it once).
+void set_command_line(int argc, char** argv);
+
+Subcommand add_info_command(CLI::App& parent);
+
+}  // namespace modestack::app

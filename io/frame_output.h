@@ -1,0 +1,88 @@
+// The output side: one EXR frame written under a temporary name in its target
+// directory and renamed to its final name only by commit(), so a crash, a
+// full disk or an interrupt never leaves a final-named file that is incomplete.
+// A denoise output copies its input frame's header (channels, pixel types,
+// windows, attributes); a render output is described from scratch.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace modestack::io {
+
+class SequenceReader;
+namespace detail {
+struct OpenFrame;
+}
+
+/// One header attribute added to an output (provenance: modestack:*).
+struct HeaderAttribute {
+    enum class Kind { Text, Integer, Real };
+    std::string name;
+    Kind kind = Kind::Text;
+    std::string text;
+    long long integer = 0;
+    double real = 0.0;
+
+    static HeaderAttribute of_text(std::string name, std::string value);
+    static HeaderAttribute of_integer(std::string name, long long value);
+    static HeaderAttribute of_real(std::string name, double value);
+};
+
+/// A new image described from scratch (used by the renderer).
+struct NewImageDescription {
+    int width = 0;
+    int height = 0;
+    std::vector<std::string> channel_names;
+    std::vector<std::string> channel_types;  ///< "half" or "float", one per channel
+    std::string compression = "zip";
+};
+
+/// An output frame under construction.
+class FrameOutput {
+public:
+    /// An output that copies frame `frame_index` of `reader` (every channel,
+    /// pixel type, window and attribute), with `extra_channels` appended in the
+    /// pixel type of the first selected channel, plus `attributes`. Tiled
+    /// inputs are written as scanline files. `reader` must outlive this object.
+    FrameOutput(const std::string& path, const SequenceReader& reader, int frame_index,
+                const std::vector<std::string>& extra_channels, const std::vector<HeaderAttribute>& attributes);
+    /// An output for a new image.
+    FrameOutput(const std::string& path, const NewImageDescription& image,
+                const std::vector<HeaderAttribute>& attributes);
+    /// Removes the temporary file unless commit() succeeded.
+    ~FrameOutput();
+    FrameOutput(const FrameOutput&) = delete;
+    FrameOutput& operator=(const FrameOutput&) = delete;
+
+    /// Writes rows [row_begin, row_end) (in increasing order, band after band)
+    /// of a copied frame: `input_native` holds those rows of every input channel
+    /// in native types (SequenceReader::read_native), `replaced` the new values
+    /// of the selected channels and `extra` the appended channels, both float,
+    /// interleaved [row][x][channel].
+    void write_replaced_rows(int row_begin, int row_end, const std::vector<unsigned char>& input_native,
+                             const float* replaced, const float* extra);
+    /// Writes rows of a new image from float data, all channels interleaved.
+    void write_float_rows(int row_begin, int row_end, const float* pixels);
+    /// Closes the file and renames it to its final name. Throws Error on failure.
+    void commit();
+
+    const std::string& path() const { return m_path; }
+
+private:
+    void open(const void* spec);
+    void fail(const std::string& what);
+
+    std::string m_path;
+    std::string m_temporary_path;
+    struct State;
+    std::unique_ptr<State> m_state;
+    bool m_committed = false;
+};
+
+/// Checks before any work: no output is also an input; each output directory
+/// exists (it is created if missing) and is writable. Throws Error otherwise.
+void check_outputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs);
+
+}  // namespace modestack::io

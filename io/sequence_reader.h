@@ -1,0 +1,63 @@
+// The input side of every command that reads a frame sequence: opens every frame
+// once, checks before any work that the frames agree (same data window, the
+// selected channels present everywhere, single-part, not deep), then reads
+// bands of scanlines of the selected channels as float, or of all channels in
+// their native pixel types for bit-exact pass-through. Works on scanline and
+// tiled files; never loads a whole frame unless asked for all its rows.
+#pragma once
+
+#include "io/layers.h"
+#include "io/sequence.h"
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace modestack::io {
+
+namespace detail {
+struct OpenFrame;
+}
+
+/// An opened, validated input sequence.
+class SequenceReader {
+public:
+    /// Opens every file of `sequence` and selects the channels named by
+    /// `layer_selectors` (see select_layers). Throws Error naming the file on
+    /// any unreadable, mismatched or unsupported frame.
+    SequenceReader(const FrameSequence& sequence, const std::vector<std::string>& layer_selectors);
+    ~SequenceReader();
+    SequenceReader(const SequenceReader&) = delete;
+    SequenceReader& operator=(const SequenceReader&) = delete;
+
+    const FrameSequence& sequence() const { return m_sequence; }
+    int frame_count() const { return static_cast<int>(m_frames.size()); }
+    int width() const { return m_width; }
+    int height() const { return m_height; }
+    /// The layers chosen for denoising and, flattened, their channels.
+    const std::vector<SelectedLayer>& layers() const { return m_layers; }
+    int selected_channel_count() const { return m_selected_channel_count; }
+    /// Selected channel names in the order read_selected() interleaves them.
+    std::vector<std::string> selected_channel_names() const;
+
+    /// Reads rows [row_begin, row_end) of the data window (0 = its top row) of
+    /// the selected channels of frame `frame_index` as float, interleaved
+    /// [row][x][channel], into `destination`. Thread-safe across frames.
+    void read_selected(int frame_index, int row_begin, int row_end, float* destination) const;
+    /// Reads the same rows of all channels in their native pixel types,
+    /// packed per pixel (as OIIO's TypeUnknown layout), resizing `destination`.
+    void read_native(int frame_index, int row_begin, int row_end, std::vector<unsigned char>& destination) const;
+
+    /// The opened frame, for io/'s writer.
+    const detail::OpenFrame& frame(int frame_index) const { return *m_frames[frame_index]; }
+
+private:
+    FrameSequence m_sequence;
+    std::vector<std::unique_ptr<detail::OpenFrame>> m_frames;
+    std::vector<SelectedLayer> m_layers;
+    int m_selected_channel_count = 0;
+    int m_width = 0;
+    int m_height = 0;
+};
+
+}  // namespace modestack::io

@@ -1,0 +1,122 @@
+// Outputs keep every input channel bit-exactly, their pixel types and the header
+// attributes; only commit() makes a final-named file.
+#include "core/common/error.h"
+#include "io/frame_output.h"
+#include "io/sequence.h"
+#include "io/sequence_reader.h"
+#include "tests/tools/testkit.h"
+
+#include <doctest/doctest.h>
+
+#include <Imath/half.h>
+
+#include <cstring>
+#include <filesystem>
+
+using namespace modestack;
+using testkit::TempDir;
+
+namespace {
+testkit::ExrLayout multilayer()
+{
+    testkit::ExrLayout layout;
+    layout.width = 19;
+    layout.height = 7;
+    layout.channel_names = {"R", "G", "B", "A", "diffuse_indirect.R", "diffuse_indirect.G", "diffuse_indirect.B", "Z"};
+    layout.channel_types = {"half", "half", "half", "half", "half", "half", "half", "float"};
+    layout.attributes = {{"renderer", "test"}, {"Frame", "0001"}};
+    return layout;
+}
+float noise_value(int frame, int x, int y, int c) { return std::sin(1.7f * x + 2.3f * y + 0.9f * c + 3.1f * frame) * 5; }
+}  // namespace
+
+TEST_CASE("round trip: replaced channels change, pass-through channels are bit-exact, attributes kept")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), {1, 2}, multilayer(), noise_value);
+    io::SequenceReader reader(io::find_input_sequence(dir.file("in.####.exr")), {"diffuse_indirect"});
+    std::string path = dir.file("out.0001.exr");
+    {
+        io::FrameOutput output(path, reader, 0, {"diffuse_indirect.sigma.R", "diffuse_indirect.sigma.G",
+                                                 "diffuse_indirect.sigma.B"},
+                               {io::HeaderAttribute::of_text("modestack:command", "modestack test"),
+                                io::HeaderAttribute::of_integer("modestack:rank", 3)});
+        std::vector<unsigned char> native;
+        for (int row = 0; row < 7; row += 3) {
+            int end = std::min(7, row + 3);
+            reader.read_native(0, row, end, native);
+            std::vector<float> replaced(19 * (end - row) * 3, 0.5f), extra(19 * (end - row) * 3, 0.125f);
+            output.write_replaced_rows(row, end, native, replaced.data(), extra.data());
+        }
+        output.commit();
+    }
+    std::vector<std::string> names = testkit::read_channel_names(path);
+    CHECK(names.size() == 11);
+    std::vector<std::string> kept{"R", "G", "B", "A", "Z"};
+    CHECK(testkit::read_channels(path, kept) == testkit::read_channels(dir.file("in.0001.exr"), kept));
+    for (float value : testkit::read_channels(path, {"diffuse_indirect.R", "diffuse_indirect.B"}))
+        CHECK(value == 0.5f);
+    for (float value : testkit::read_channels(path, {"diffuse_indirect.sigma.G"}))
+        CHECK(value == 0.125f);
+    CHECK(testkit::read_string_attribute(path, "renderer") == "test");
+    CHECK(testkit::read_string_attribute(path, "modestack:command") == "modestack test");
+    CHECK(testkit::read_string_attribute(path, "compression") == "zip");
+
+    // Bit-exact: half channels are compared as raw bits, not values.
+    std::vector<unsigned char> in = testkit::read_native(dir.file("in.0001.exr"));
+    std::vector<unsigned char> out = testkit::read_native(path);
+    // Input pixel: 7 half + 1 float = 18 bytes; output adds 3 half = 24 bytes.
+    for (size_t p = 0; p < 19 * 7; ++p)
+        CHECK(std::memcmp(in.data() + p * 18, out.data() + p * 24, 8) == 0);  // R,G,B,A
+}
+
+TEST_CASE("atomic write: nothing under the final name until commit, no temporary left after a failure")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), {1}, multilayer(), noise_value);
+    io::SequenceReader reader(io::find_input_sequence(dir.file("in.####.exr")), {"diffuse_indirect"});
+    {
+        io::FrameOutput output(dir.file("out.0001.exr"), reader, 0, {}, {});
+        std::vector<unsigned char> native;
+        reader.read_native(0, 0, 3, native);
+        std::vector<float> replaced(19 * 3 * 3, 1.0f);
+        output.write_replaced_rows(0, 3, native, replaced.data(), nullptr);
+        CHECK_FALSE(std::filesystem::exists(dir.file("out.0001.exr")));
+        // Destroyed without commit, as when an error or interrupt unwinds.
+    }
+    CHECK(testkit::list_directory(dir.path()) == std::vector<std::string>{"in.0001.exr"});
+}
+
+TEST_CASE("new images: float and half channels written from float data")
+{
+    TempDir dir;
+    io::NewImageDescription image;
+    image.width = 5;
+    image.height = 4;
+    image.channel_names = {"Combined.R", "Combined.G", "Combined.B", "Combined.A", "Depth.Z"};
+    image.channel_types = {"half", "half", "half", "half", "float"};
+    std::vector<float> pixels(5 * 4 * 5);
+    for (size_t i = 0; i < pixels.size(); ++i)
+        pixels[i] = 0.001f * i + 1.0f / 3.0f;
+    io::FrameOutput output(dir.file("new.exr"), image, {io::HeaderAttribute::of_integer("modestack:spp", 4)});
+    output.write_float_rows(0, 4, pixels.data());
+    output.commit();
+    std::vector<float> depth = testkit::read_channels(dir.file("new.exr"), {"Depth.Z"});
+    std::vector<float> red = testkit::read_channels(dir.file("new.exr"), {"Combined.R"});
+    for (size_t p = 0; p < 20; ++p) {
+        CHECK(depth[p] == pixels[p * 5 + 4]);
+        CHECK(red[p] == float(Imath::half(pixels[p * 5])));
+    }
+}
+
+TEST_CASE("check_outputs refuses an output equal to an input and an output directory that cannot exist")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), {1}, multilayer(), noise_value);
+    CHECK_THROWS_WITH_AS(io::check_outputs({dir.path() + "/./in.0001.exr"}, {dir.file("in.0001.exr")}),
+                         doctest::Contains("is also an input"), Error);
+    CHECK_THROWS_WITH_AS(io::check_outputs({dir.file("in.0001.exr") + "/sub/out.exr"}, {}),
+                         doctest::Contains("output directory"), Error);
+    io::check_outputs({dir.file("new/dir/out.0001.exr")}, {dir.file("in.0001.exr")});
+    CHECK(std::filesystem::is_directory(dir.file("new/dir")));
+}

@@ -1,0 +1,112 @@
+// Frame-sequence patterns and ranges as oiiotool users write them.
+#include "core/common/error.h"
+#include "io/sequence.h"
+#include "tests/tools/testkit.h"
+
+#include <doctest/doctest.h>
+
+using namespace modestack;
+using modestack::testkit::TempDir;
+
+namespace {
+std::string normalized(const std::string& pattern)
+{
+    std::string printf_pattern, range;
+    REQUIRE(io::normalize_pattern(pattern, printf_pattern, range));
+    return printf_pattern;
+}
+void touch_frames(const TempDir& dir, const std::vector<int>& frames)
+{
+    testkit::write_sequence(dir.file("shot.%04d.exr"), frames, {}, [](int, int, int, int) { return 1.0f; });
+}
+}  // namespace
+
+TEST_CASE("patterns: #### is four digits, # is four digits, @ one digit each, %04d as is")
+{
+    CHECK(normalized("dir/shot.####.exr") == "dir/shot.%04d.exr");
+    CHECK(normalized("shot.#.exr") == "shot.%04d.exr");
+    CHECK(normalized("shot.@@@.exr") == "shot.%03d.exr");
+    CHECK(normalized("shot.@.exr") == "shot.%01d.exr");
+    CHECK(normalized("shot.%05d.exr") == "shot.%05d.exr");
+    CHECK(normalized("shot.##.exr") == "shot.%02d.exr");
+    std::string printf_pattern, range;
+    CHECK(io::normalize_pattern("shot.1001-1010#.exr", printf_pattern, range));
+    CHECK(range == "1001-1010");
+    CHECK_FALSE(io::normalize_pattern("shot.exr", printf_pattern, range));
+}
+
+TEST_CASE("frame ranges: plain, 1001-based, stepped, lists; malformed ones are usage errors")
+{
+    CHECK(io::parse_frame_range("1-5") == std::vector<int>{1, 2, 3, 4, 5});
+    CHECK(io::parse_frame_range("1001-1003") == std::vector<int>{1001, 1002, 1003});
+    CHECK(io::parse_frame_range("1-9x4") == std::vector<int>{1, 5, 9});
+    CHECK(io::parse_frame_range("1,3,7-9") == std::vector<int>{1, 3, 7, 8, 9});
+    for (const char* bad : {"", "abc", "1-", "1-3,x", "3,3"}) {
+        CAPTURE(bad);
+        try {
+            io::parse_frame_range(bad);
+            FAIL("no error");
+        } catch (const Error& error) {
+            CHECK(error.kind() == ErrorKind::Usage);
+            CHECK(std::string(error.what()).find("--frames") != std::string::npos);
+        }
+    }
+}
+
+TEST_CASE("describe_frames is compact and round-trips through parse_frame_range")
+{
+    for (std::vector<int> frames : {std::vector<int>{1, 2, 3, 4}, {1001, 1002}, {1, 3, 5, 7}, {1, 3, 7, 8, 9}, {5}}) {
+        std::string text = io::describe_frames(frames);
+        CAPTURE(text);
+        CHECK(io::parse_frame_range(text) == frames);
+    }
+    CHECK(io::describe_frames({1, 2, 3, 4}) == "1-4");
+    CHECK(io::describe_frames({1, 3, 5, 7}) == "1-7x2");
+}
+
+TEST_CASE("input sequences: scanned from disk, 1001-based, gaps are an error unless --frames names the frames")
+{
+    TempDir dir;
+    touch_frames(dir, {1001, 1002, 1003, 1005});
+    io::FrameSequence chosen = io::find_input_sequence(dir.file("shot.####.exr"), "1001-1003");
+    CHECK(chosen.frames == std::vector<int>{1001, 1002, 1003});
+    CHECK(chosen.files.back() == dir.file("shot.1003.exr"));
+    io::FrameSequence scanned = io::scan_input_sequence(dir.file("shot.####.exr"));
+    CHECK(scanned.frames == std::vector<int>{1001, 1002, 1003, 1005});
+    CHECK(io::missing_frames(scanned.frames) == std::vector<int>{1004});
+    try {
+        io::find_input_sequence(dir.file("shot.####.exr"));
+        FAIL("no error for a gap");
+    } catch (const Error& error) {
+        CHECK(error.kind() == ErrorKind::BadInput);
+        CHECK(std::string(error.what()).find("1004") != std::string::npos);
+    }
+    try {
+        io::find_input_sequence(dir.file("shot.%04d.exr"), "1003-1004");
+        FAIL("no error for a missing frame");
+    } catch (const Error& error) {
+        CHECK(error.file() == dir.file("shot.1004.exr"));
+        CHECK(error.frame() == 1004);
+    }
+    CHECK(io::find_input_sequence(dir.file("shot.####.exr"), "1001-1005x2").frames == std::vector<int>{1001, 1003, 1005});
+}
+
+TEST_CASE("input sequences: no frames, missing directory and non-patterns are clear errors")
+{
+    TempDir dir;
+    CHECK_THROWS_AS(io::find_input_sequence(dir.file("none.####.exr")), Error);
+    CHECK_THROWS_AS(io::find_input_sequence(dir.file("missing/none.####.exr")), Error);
+    try {
+        io::find_input_sequence(dir.file("plain.exr"));
+        FAIL("no error");
+    } catch (const Error& error) {
+        CHECK(error.kind() == ErrorKind::Usage);
+    }
+}
+
+TEST_CASE("output sequences name one file per frame with the pattern's padding")
+{
+    io::FrameSequence out = io::output_sequence("out/den.####.exr", {1, 2, 10});
+    CHECK(out.files == std::vector<std::string>{"out/den.0001.exr", "out/den.0002.exr", "out/den.0010.exr"});
+    CHECK_THROWS_AS(io::output_sequence("out/den.exr", {1, 2}), Error);
+}
