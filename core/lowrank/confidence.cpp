@@ -1,0 +1,110 @@
+#include "core/lowrank/confidence.h"
+
+#include "core/common/error.h"
+#include "core/common/progress.h"
+#include "core/lowrank/tiles.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace modestack::lowrank {
+namespace {
+
+// Writes the windowed mean of r² of frame t for the output rows into sigma's frame t.
+void windowed_residual_power(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
+                             int radius, int valid_y0, int valid_y1, int t, MutableBandView sigma,
+                             std::vector<double>& column_sum)
+{
+    const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
+    const float* noisy_frame = noisy.data + t * noisy.frame_stride;
+    const float* rebuilt_frame = rebuilt.data + t * rebuilt.frame_stride;
+    float* out_frame = sigma.data + t * sigma.frame_stride;
+    for (int y = valid_y0; y < valid_y1; ++y) {
+        const int y_first = std::max(0, y - radius);
+        const int y_last = std::min(shape.height - 1, y + radius);
+        std::fill(column_sum.begin(), column_sum.end(), 0.0);
+        for (int source_y = y_first; source_y <= y_last; ++source_y) {
+            const std::int64_t offset = source_y * row_length;
+            for (std::int64_t k = 0; k < row_length; ++k) {
+                const double residual =
+                    static_cast<double>(noisy_frame[offset + k]) - rebuilt_frame[offset + k];
+                column_sum[static_cast<std::size_t>(k)] += residual * residual;
+            }
+        }
+        const int rows_in_window = y_last - y_first + 1;
+        float* out_row = out_frame + (y - valid_y0) * row_length;
+        for (int x = 0; x < shape.width; ++x) {
+            const int x_first = std::max(0, x - radius);
+            const int x_last = std::min(shape.width - 1, x + radius);
+            const double count = static_cast<double>(rows_in_window) * (x_last - x_first + 1);
+            for (int c = 0; c < shape.channels; ++c) {
+                double sum = 0;
+                for (int source_x = x_first; source_x <= x_last; ++source_x)
+                    sum += column_sum[static_cast<std::size_t>(source_x * shape.channels + c)];
+                out_row[x * shape.channels + c] = static_cast<float>(sum / count);
+            }
+        }
+    }
+}
+
+} // namespace
+
+void confidence_band(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
+                     const Eigen::VectorXd& leverages, int rank, int valid_y0, int valid_y1,
+                     const ConfidenceOptions& options, MutableBandView sigma)
+{
+    const int frames = noisy.frames;
+    const std::int64_t band_rows = static_cast<std::int64_t>(shape.width) * shape.height * shape.channels;
+    const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
+    if (noisy.rows != band_rows || rebuilt.rows != band_rows || rebuilt.frames != frames ||
+        sigma.frames != frames || leverages.size() != frames)
+        throw internal_error("confidence_band: band shapes do not match");
+    if (valid_y0 < 0 || valid_y1 > shape.height || valid_y0 > valid_y1 ||
+        sigma.rows != row_length * (valid_y1 - valid_y0))
+        throw internal_error("confidence_band: output rows do not match the valid range");
+    if (rank < 0 || rank >= frames)
+        throw internal_error("confidence_band: rank must be less than the number of frames");
+    if (options.radius < 0)
+        throw internal_error("confidence_band: negative window radius");
+    if (sigma.rows == 0)
+        return;
+
+    // Stage 1: m_t per pixel and channel, stored in sigma's own frames.
+    throw_if_cancelled();
+    tbb::parallel_for(tbb::blocked_range<int>(0, frames, 1), [&](const tbb::blocked_range<int>& range) {
+        std::vector<double> column_sum(static_cast<std::size_t>(row_length));
+        for (int t = range.begin(); t != range.end(); ++t)
+            windowed_residual_power(noisy, rebuilt, shape, options.radius, valid_y0, valid_y1, t, sigma,
+                                    column_sum);
+    });
+
+    // Stage 2: s², bias and sigma per sample, summing over frames in frame order.
+    const double degrees_of_freedom = frames - rank;
+    const int radius = options.radius;
+    for_each_tile(sigma.rows, [&](std::int64_t row0, std::int64_t count) {
+        for (std::int64_t i = row0; i < row0 + count; ++i) {
+            const std::int64_t pixel = i / shape.channels;
+            const int x = static_cast<int>(pixel % shape.width);
+            const int y = valid_y0 + static_cast<int>(pixel / shape.width);
+            const int window_width = std::min(shape.width - 1, x + radius) - std::max(0, x - radius) + 1;
+            const int window_height = std::min(shape.height - 1, y + radius) - std::max(0, y - radius) + 1;
+            const double window_size = static_cast<double>(window_width) * window_height;
+            const double margin = 1.0 + options.bias_significance * std::sqrt(2.0 / window_size);
+            double energy = 0;
+            for (int t = 0; t < frames; ++t)
+                energy += sigma.at(i, t);
+            const double noise_variance = energy / degrees_of_freedom;
+            for (int t = 0; t < frames; ++t) {
+                const double power = sigma.at(i, t);
+                const double bias = std::max(0.0, power - noise_variance * (1.0 - leverages(t)) * margin);
+                sigma.at(i, t) = static_cast<float>(std::sqrt(noise_variance * leverages(t) + bias));
+            }
+        }
+    });
+}
+
+} // namespace modestack::lowrank

@@ -1,0 +1,113 @@
+#include "core/lowrank/outliers.h"
+
+#include "core/lowrank/tiles.h"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace modestack::lowrank {
+namespace {
+
+// Median of values[0..count) (reorders them).
+double median_of(std::vector<double>& values, std::size_t count)
+{
+    if (count == 0)
+        return 0.0;
+    const auto middle = values.begin() + static_cast<std::ptrdiff_t>(count / 2);
+    std::nth_element(values.begin(), middle, values.begin() + static_cast<std::ptrdiff_t>(count));
+    const double upper = *middle;
+    if (count % 2 == 1)
+        return upper;
+    const double lower = *std::max_element(values.begin(), middle);
+    return 0.5 * (lower + upper);
+}
+
+// Scratch for one row.
+struct RowScratch {
+    std::vector<double> row;
+    std::vector<double> sorted;
+};
+
+OutlierCounts clean_row(const MutableBandView& band, std::int64_t i, const OutlierOptions& options,
+                        RowScratch& scratch)
+{
+    OutlierCounts counts;
+    const int frames = band.frames;
+    std::size_t finite = 0;
+    for (int t = 0; t < frames; ++t) {
+        const double value = band.at(i, t);
+        scratch.row[static_cast<std::size_t>(t)] = value;
+        if (std::isfinite(value))
+            scratch.sorted[finite++] = value;
+    }
+    bool changed = false;
+    if (finite < static_cast<std::size_t>(frames)) {
+        const double median = median_of(scratch.sorted, finite);
+        for (double& value : scratch.row)
+            if (!std::isfinite(value)) {
+                value = median;
+                ++counts.non_finite;
+            }
+        changed = true;
+    }
+    if (options.fireflies && frames >= 3) {
+        std::copy(scratch.row.begin(), scratch.row.end(), scratch.sorted.begin());
+        const double median = median_of(scratch.sorted, scratch.row.size());
+        for (int t = 0; t < frames; ++t)
+            scratch.sorted[static_cast<std::size_t>(t)] =
+                std::abs(scratch.row[static_cast<std::size_t>(t)] - median);
+        const double mad = median_of(scratch.sorted, scratch.row.size());
+        for (int t = 0; t < frames; ++t)
+            scratch.sorted[static_cast<std::size_t>(t)] = std::abs(scratch.row[static_cast<std::size_t>(t)]);
+        const double typical_magnitude = median_of(scratch.sorted, scratch.row.size());
+        const double spread = std::max({mad, options.mad_floor_fraction * typical_magnitude, 1e-30});
+        const double threshold = median + options.firefly_k * 1.4826 * spread;
+        double excess = 0;
+        for (double& value : scratch.row)
+            if (value > threshold) {
+                excess += value - threshold;
+                value = threshold;
+                ++counts.fireflies;
+            }
+        if (excess > 0) {
+            const double share = excess / frames;
+            for (double& value : scratch.row)
+                value += share;
+            changed = true;
+        }
+    }
+    if (changed)
+        for (int t = 0; t < frames; ++t)
+            band.at(i, t) = static_cast<float>(scratch.row[static_cast<std::size_t>(t)]);
+    return counts;
+}
+
+} // namespace
+
+OutlierCounts clean_outliers(MutableBandView band, const OutlierOptions& options)
+{
+    if (band.rows <= 0 || band.frames <= 0)
+        return {};
+    const std::int64_t tiles = tile_count(band.rows);
+    std::vector<OutlierCounts> per_tile(static_cast<std::size_t>(tiles));
+    for_each_tile(band.rows, [&](std::int64_t row0, std::int64_t count) {
+        RowScratch scratch;
+        scratch.row.resize(static_cast<std::size_t>(band.frames));
+        scratch.sorted.resize(static_cast<std::size_t>(band.frames));
+        OutlierCounts& tile_counts = per_tile[static_cast<std::size_t>(row0 / kTileRows)];
+        for (std::int64_t i = row0; i < row0 + count; ++i) {
+            const OutlierCounts row_counts = clean_row(band, i, options, scratch);
+            tile_counts.non_finite += row_counts.non_finite;
+            tile_counts.fireflies += row_counts.fireflies;
+        }
+    });
+    OutlierCounts total;
+    for (const OutlierCounts& counts : per_tile) {
+        total.non_finite += counts.non_finite;
+        total.fireflies += counts.fireflies;
+    }
+    return total;
+}
+
+} // namespace modestack::lowrank

@@ -1,0 +1,71 @@
+#include "core/lowrank/projection.h"
+
+#include "core/common/error.h"
+#include "core/lowrank/tiles.h"
+
+#include <string>
+
+namespace modestack::lowrank {
+namespace {
+
+void check_shapes(std::int64_t rows_in, int frames_in, std::int64_t rows_out, int frames_out,
+                  const char* what)
+{
+    if (rows_in != rows_out || frames_in != frames_out)
+        throw internal_error(std::string(what) + ": band shapes do not match the basis");
+}
+
+void write_tile(const Eigen::MatrixXd& values, std::int64_t row0, MutableBandView out)
+{
+    for (Eigen::Index f = 0; f < values.cols(); ++f) {
+        float* target = out.data + f * out.frame_stride + row0;
+        const double* source = values.col(f).data();
+        for (Eigen::Index i = 0; i < values.rows(); ++i)
+            target[i] = static_cast<float>(source[i]);
+    }
+}
+
+} // namespace
+
+void project_band(const BandView& in, const Eigen::MatrixXd& temporal_n, MutableBandView out)
+{
+    check_shapes(in.rows, in.frames, out.rows, out.frames, "project_band");
+    if (temporal_n.rows() != in.frames)
+        throw internal_error("project_band: basis has the wrong number of frames");
+    for_each_tile(in.rows, [&](std::int64_t row0, std::int64_t count) {
+        Eigen::MatrixXd tile;
+        copy_tile(in, row0, count, tile);
+        const Eigen::MatrixXd coefficients = tile * temporal_n;
+        const Eigen::MatrixXd rebuilt = coefficients * temporal_n.transpose();
+        write_tile(rebuilt, row0, out);
+    });
+}
+
+void project_coefficients(const BandView& in, const Eigen::MatrixXd& temporal_n, MutableBandView coefficients)
+{
+    check_shapes(in.rows, static_cast<int>(temporal_n.cols()), coefficients.rows, coefficients.frames,
+                 "project_coefficients");
+    if (temporal_n.rows() != in.frames)
+        throw internal_error("project_coefficients: basis has the wrong number of frames");
+    for_each_tile(in.rows, [&](std::int64_t row0, std::int64_t count) {
+        Eigen::MatrixXd tile;
+        copy_tile(in, row0, count, tile);
+        write_tile(tile * temporal_n, row0, coefficients);
+    });
+}
+
+void rebuild_from_coefficients(const BandView& coefficients, const Eigen::MatrixXd& temporal_n,
+                               MutableBandView out)
+{
+    check_shapes(coefficients.rows, static_cast<int>(temporal_n.rows()), out.rows, out.frames,
+                 "rebuild_from_coefficients");
+    if (temporal_n.cols() != coefficients.frames)
+        throw internal_error("rebuild_from_coefficients: basis has the wrong number of modes");
+    for_each_tile(coefficients.rows, [&](std::int64_t row0, std::int64_t count) {
+        Eigen::MatrixXd tile;
+        copy_tile(coefficients, row0, count, tile);
+        write_tile(tile * temporal_n.transpose(), row0, out);
+    });
+}
+
+} // namespace modestack::lowrank

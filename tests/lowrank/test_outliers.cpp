@@ -1,0 +1,143 @@
+// Outlier cleaning: NaN/Inf replaced by the row median and counted, fireflies
+// clamped with the row's temporal sum preserved, clean data left bit-exact, and the
+// same result with 1 and 2 threads.
+#include "core/lowrank/outliers.h"
+#include "tests/lowrank/synthetic.h"
+
+#include <doctest/doctest.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cstring>
+#include <limits>
+
+using namespace modestack::lowrank;
+using namespace modestack::lowrank::testing;
+
+namespace {
+
+FrameMatrix positive_noisy(std::int64_t rows, int frames, std::uint64_t seed)
+{
+    FrameMatrix matrix = low_rank_matrix(rows, frames, {1.0, 0.3}, seed);
+    add_gaussian_noise(matrix, 0.1, seed + 1);
+    for (float& value : matrix.data)
+        value = std::abs(value) + 1.0f; // radiance-like: positive
+    return matrix;
+}
+
+double row_sum(const FrameMatrix& matrix, std::int64_t row)
+{
+    double sum = 0;
+    for (int t = 0; t < matrix.frames; ++t)
+        sum += matrix.at(row, t);
+    return sum;
+}
+
+} // namespace
+
+TEST_CASE("NaN and Inf are replaced by the row's median of finite values and counted")
+{
+    FrameMatrix matrix = positive_noisy(3000, 9, 1);
+    const FrameMatrix original = matrix;
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    const float inf = std::numeric_limits<float>::infinity();
+    matrix.at(10, 2) = nan;
+    matrix.at(10, 5) = inf;
+    matrix.at(2500, 0) = -inf;
+    for (int t = 0; t < 9; ++t)
+        matrix.at(77, t) = nan; // nothing finite: becomes 0
+
+    // Expected: the median of the 7 finite values of row 10 (odd count: the middle one).
+    std::vector<float> finite;
+    for (int t = 0; t < 9; ++t)
+        if (t != 2 && t != 5)
+            finite.push_back(matrix.at(10, t));
+    std::sort(finite.begin(), finite.end());
+    std::vector<float> finite_2500;
+    for (int t = 1; t < 9; ++t)
+        finite_2500.push_back(matrix.at(2500, t));
+    std::sort(finite_2500.begin(), finite_2500.end());
+
+    OutlierOptions options;
+    options.fireflies = false;
+    const OutlierCounts counts = clean_outliers(matrix.mutable_view(), options);
+    CHECK(counts.non_finite == 12);
+    CHECK(counts.fireflies == 0);
+    CHECK(matrix.at(10, 2) == finite[3]);
+    CHECK(matrix.at(10, 5) == finite[3]);
+    CHECK(matrix.at(2500, 0) == doctest::Approx(0.5 * (finite_2500[3] + finite_2500[4])));
+    for (int t = 0; t < 9; ++t)
+        CHECK(matrix.at(77, t) == 0.0f);
+    for (float value : matrix.data)
+        CHECK_FALSE(!std::isfinite(value));
+    CHECK(matrix.at(11, 3) == original.at(11, 3));
+}
+
+TEST_CASE("a huge spike is clamped and its energy stays in the row")
+{
+    FrameMatrix matrix = positive_noisy(3000, 24, 11);
+    const FrameMatrix original = matrix;
+    matrix.at(1234, 6) = 5000.0f;
+    const double sum_before = row_sum(matrix, 1234);
+    const OutlierCounts counts = clean_outliers(matrix.mutable_view());
+    CHECK(counts.fireflies == 1);
+    CHECK(counts.non_finite == 0);
+    const double sum_after = row_sum(matrix, 1234);
+    MESSAGE("row sum before " << sum_before << ", after " << sum_after);
+    CHECK(std::abs(sum_after - sum_before) <= 1e-5 * std::abs(sum_before));
+    // Clamped: the spike is gone, its excess spread evenly over the other frames.
+    const float share = matrix.at(1234, 0) - original.at(1234, 0);
+    // The clamp level is median + 6·1.4826·max(MAD, 0.1·median |x|) of the row with its
+    // spike (here the floor decides: the row's MAD is about 3 % of its level).
+    std::vector<double> values;
+    for (int t = 0; t < 24; ++t)
+        values.push_back(t == 6 ? 5000.0 : original.at(1234, t));
+    std::sort(values.begin(), values.end());
+    const double median = 0.5 * (values[11] + values[12]);
+    for (double& value : values)
+        value = std::abs(value - median);
+    std::sort(values.begin(), values.end());
+    const double mad = 0.5 * (values[11] + values[12]);
+    const double threshold = median + 6 * 1.4826 * std::max(mad, 0.1 * median);
+    CHECK(matrix.at(1234, 6) - share == doctest::Approx(threshold).epsilon(1e-4));
+    // 24·share = 5000 − threshold and the spike ends at threshold + share.
+    CHECK(share == doctest::Approx((5000.0 - matrix.at(1234, 6)) / 23).epsilon(1e-3));
+    for (int t = 0; t < 24; ++t)
+        if (t != 6)
+            CHECK(matrix.at(1234, t) - original.at(1234, t) == doctest::Approx(share).epsilon(1e-3));
+    // Every other row is untouched.
+    for (std::int64_t i = 0; i < matrix.rows; ++i)
+        if (i != 1234)
+            for (int t = 0; t < 24; ++t)
+                REQUIRE(matrix.at(i, t) == original.at(i, t));
+}
+
+TEST_CASE("clean data is left bit-exact")
+{
+    FrameMatrix matrix = positive_noisy(5000, 24, 21);
+    const FrameMatrix original = matrix;
+    const OutlierCounts counts = clean_outliers(matrix.mutable_view());
+    CHECK(counts.non_finite == 0);
+    CHECK(counts.fireflies == 0);
+    CHECK(std::memcmp(matrix.data.data(), original.data.data(), sizeof(float) * matrix.data.size()) == 0);
+}
+
+TEST_CASE("outlier cleaning is bit-identical with 1 and 2 threads")
+{
+    FrameMatrix input = positive_noisy(20000, 16, 31);
+    for (std::int64_t i = 0; i < input.rows; i += 97)
+        input.at(i, static_cast<int>(i % 16)) =
+            (i % 3 == 0) ? std::numeric_limits<float>::quiet_NaN() : 300.0f;
+    auto run = [&](int threads, FrameMatrix& matrix, OutlierCounts& counts) {
+        tbb::task_arena arena(threads);
+        arena.execute([&] { counts = clean_outliers(matrix.mutable_view()); });
+    };
+    FrameMatrix one = input, two = input;
+    OutlierCounts counts_one, counts_two;
+    run(1, one, counts_one);
+    run(2, two, counts_two);
+    CHECK(counts_one.non_finite == counts_two.non_finite);
+    CHECK(counts_one.fireflies == counts_two.fireflies);
+    CHECK(counts_one.non_finite + counts_one.fireflies == (input.rows + 96) / 97);
+    CHECK(std::memcmp(one.data.data(), two.data.data(), sizeof(float) * one.data.size()) == 0);
+}
