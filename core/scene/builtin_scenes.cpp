@@ -1,0 +1,189 @@
+// The built-in animated rooms (see builtin_scenes.h). Every quantity that moves
+// is computed from the frame number alone, never accumulated from earlier frames.
+#include "core/scene/builtin_scenes.h"
+
+#include "core/common/error.h"
+
+#include <cmath>
+
+namespace modestack::scene {
+namespace {
+
+constexpr int kFirstFrame = 1;
+constexpr int kLastFrame = 48;
+constexpr float kPi = 3.14159265358979323846f;
+
+// The room spans x ∈ [−1, 1], y ∈ [0, 2], z ∈ [kBackZ, kFrontZ]; the camera stands
+// inside it near the front wall, so the room is closed and every ray hits something.
+constexpr float kBackZ = -1.0f;
+constexpr float kFrontZ = 2.6f;
+constexpr float kLightY = 1.98f; // just below the ceiling, so the light is not coplanar with it
+const Vec3 kWhite{0.73f, 0.73f, 0.73f};
+const Vec3 kRed{0.63f, 0.065f, 0.05f};
+const Vec3 kGreen{0.14f, 0.45f, 0.091f};
+const Vec3 kLightEmission{22.0f, 18.0f, 12.5f};
+
+Mesh make_wall(const std::string& name, Vec3 albedo, Vec3 emission, Vec3 p0, Vec3 p1, Vec3 p2, Vec3 p3)
+{
+    Mesh wall;
+    wall.name = name;
+    wall.material.albedo = albedo;
+    wall.material.emission = emission;
+    add_quad(wall, p0, p1, p2, p3);
+    return wall;
+}
+
+// The six inward-facing walls. `emission` is for the furnace; lit rooms pass zero.
+void add_room(Scene& scene, Vec3 floor_ceiling_back_front, Vec3 left, Vec3 right, Vec3 emission)
+{
+    const float b = kBackZ, f = kFrontZ;
+    const Vec3 white = floor_ceiling_back_front;
+    scene.meshes.push_back(make_wall("floor", white, emission, {-1, 0, f}, {1, 0, f}, {1, 0, b}, {-1, 0, b}));
+    scene.meshes.push_back(
+        make_wall("ceiling", white, emission, {-1, 2, b}, {1, 2, b}, {1, 2, f}, {-1, 2, f}));
+    scene.meshes.push_back(make_wall("back", white, emission, {-1, 0, b}, {1, 0, b}, {1, 2, b}, {-1, 2, b}));
+    scene.meshes.push_back(make_wall("front", white, emission, {1, 0, f}, {-1, 0, f}, {-1, 2, f}, {1, 2, f}));
+    scene.meshes.push_back(make_wall("left", left, emission, {-1, 0, f}, {-1, 0, b}, {-1, 2, b}, {-1, 2, f}));
+    scene.meshes.push_back(make_wall("right", right, emission, {1, 0, b}, {1, 0, f}, {1, 2, f}, {1, 2, b}));
+}
+
+Scene make_lit_room()
+{
+    Scene scene;
+    scene.camera.position = {0, 1.05f, 2.5f};
+    scene.camera.look_at = {0, 0.8f, 0};
+    scene.camera.up = {0, 1, 0};
+    scene.camera.vertical_fov_degrees = 48;
+    add_room(scene, kWhite, kRed, kGreen, {});
+    return scene;
+}
+
+Material white_material()
+{
+    Material material;
+    material.albedo = kWhite;
+    return material;
+}
+
+Scene make_static(int)
+{
+    Scene scene = make_lit_room();
+    scene.meshes.push_back(
+        make_box("tall box", {-0.38f, 0, -0.35f}, {0.55f, 1.2f, 0.55f}, 0.3f, white_material()));
+    scene.meshes.push_back(
+        make_box("short box", {0.4f, 0, 0.2f}, {0.55f, 0.55f, 0.55f}, -0.3f, white_material()));
+    scene.meshes.push_back(make_ceiling_light("light", {0, kLightY, 0}, 0.5f, 0.5f, kLightEmission));
+    return scene;
+}
+
+Scene make_orbit(int frame)
+{
+    Scene scene = make_lit_room();
+    scene.meshes.push_back(
+        make_box("tall box", {-0.38f, 0, -0.35f}, {0.55f, 1.2f, 0.55f}, 0.3f, white_material()));
+    scene.meshes.push_back(
+        make_box("short box", {0.4f, 0, 0.2f}, {0.55f, 0.55f, 0.55f}, -0.3f, white_material()));
+    // One full turn over the shot, radius 0.55 m about the room's centre.
+    float angle =
+        2 * kPi * static_cast<float>(frame - kFirstFrame) / static_cast<float>(kLastFrame - kFirstFrame + 1);
+    Vec3 center{0.55f * std::cos(angle), kLightY, 0.1f + 0.55f * std::sin(angle)};
+    scene.meshes.push_back(make_ceiling_light("light", center, 0.45f, 0.45f, kLightEmission));
+    return scene;
+}
+
+Scene make_switch(int frame)
+{
+    Scene scene = make_lit_room();
+    scene.meshes.push_back(
+        make_box("tall box", {-0.45f, 0, -0.5f}, {0.5f, 1.2f, 0.5f}, 0.35f, white_material()));
+    scene.meshes.push_back(
+        make_box("short box", {0.5f, 0, -0.35f}, {0.5f, 0.5f, 0.5f}, -0.3f, white_material()));
+    Vec3 center = frame < kSwitchLightJumpFrame ? Vec3{-0.45f, kLightY, 0.1f} : Vec3{0.45f, kLightY, 0.5f};
+    scene.meshes.push_back(make_ceiling_light("light", center, 0.5f, 0.5f, kLightEmission));
+    if (frame >= kSwitchCrossingFirstFrame && frame <= kSwitchCrossingLastFrame) {
+        // Left to right across the open floor in front of the boxes, one step per frame.
+        float t = static_cast<float>(frame - kSwitchCrossingFirstFrame) /
+                  static_cast<float>(kSwitchCrossingLastFrame - kSwitchCrossingFirstFrame);
+        Material blue;
+        blue.albedo = {0.15f, 0.25f, 0.7f};
+        scene.meshes.push_back(
+            make_box("crossing box", {-0.7f + 1.4f * t, 0, 0.45f}, {0.28f, 0.28f, 0.28f}, 2.0f * t, blue));
+    }
+    return scene;
+}
+
+Scene make_spin(int frame)
+{
+    Scene scene = make_lit_room();
+    // Half a turn over the shot; the box is not square so its shadow changes shape.
+    float angle =
+        kPi * static_cast<float>(frame - kFirstFrame) / static_cast<float>(kLastFrame - kFirstFrame + 1);
+    scene.meshes.push_back(
+        make_box("spinning box", {0, 0, -0.2f}, {0.9f, 0.8f, 0.3f}, angle, white_material()));
+    scene.meshes.push_back(make_ceiling_light("light", {0.35f, kLightY, 0.35f}, 0.4f, 0.4f, kLightEmission));
+    return scene;
+}
+
+std::string scene_names()
+{
+    std::string names;
+    for (const SceneInfo& info : builtin_scenes())
+        names += (names.empty() ? "" : ", ") + info.name;
+    return names;
+}
+
+} // namespace
+
+const std::vector<SceneInfo>& builtin_scenes()
+{
+    static const std::vector<SceneInfo> scenes = {
+        {"static", "nothing moves: two boxes under a ceiling light", kFirstFrame, kLastFrame},
+        {"orbit", "the ceiling light circles the room once during the shot", kFirstFrame, kLastFrame},
+        {"switch",
+         "the light jumps to another place at frame 25; a small blue box crosses the floor in frames 30-36 "
+         "only",
+         kFirstFrame, kLastFrame},
+        {"spin", "a flat box turns half a turn under a fixed light; its shadow sweeps the floor", kFirstFrame,
+         kLastFrame},
+    };
+    return scenes;
+}
+
+Scene make_builtin_scene(const std::string& name, int frame)
+{
+    const SceneInfo* info = nullptr;
+    for (const SceneInfo& candidate : builtin_scenes())
+        if (candidate.name == name)
+            info = &candidate;
+    if (info == nullptr)
+        throw usage_error("unknown scene '" + name + "' (available: " + scene_names() + ")");
+    if (frame < info->first_frame || frame > info->last_frame)
+        throw usage_error("frame " + std::to_string(frame) + " is outside scene '" + name + "' (frames " +
+                          std::to_string(info->first_frame) + "-" + std::to_string(info->last_frame) + ")");
+    if (name == "static")
+        return make_static(frame);
+    if (name == "orbit")
+        return make_orbit(frame);
+    if (name == "switch")
+        return make_switch(frame);
+    return make_spin(frame);
+}
+
+Scene make_furnace_scene(float albedo, float emission)
+{
+    if (!(albedo >= 0 && albedo < 1) || !(emission >= 0))
+        throw usage_error("furnace scene needs 0 <= albedo < 1 and emission >= 0");
+    Scene scene;
+    scene.camera.position = {0, 1, 2.2f};
+    scene.camera.look_at = {0, 0.8f, 0};
+    scene.camera.vertical_fov_degrees = 60;
+    Vec3 a{albedo, albedo, albedo}, e{emission, emission, emission};
+    add_room(scene, a, a, a, e);
+    Material material;
+    material.albedo = a;
+    material.emission = e;
+    scene.meshes.push_back(make_box("box", {0.2f, 0, -0.2f}, {0.6f, 0.8f, 0.6f}, 0.4f, material));
+    return scene;
+}
+
+} // namespace modestack::scene

@@ -1,0 +1,43 @@
+// The built-in animated scenes of `modestack render --scene NAME`: small closed
+// Cornell-style rooms (white floor, ceiling, back and front walls, red left wall,
+// green right wall, boxes, one ceiling quad light) whose animation is a closed-form
+// function of the frame number, so any frame can be rebuilt exactly and on its own
+// (the refine step re-renders single frames). Also the white-furnace room the
+// tests use to check the tracer's radiometry.
+#pragma once
+
+#include "core/scene/scene.h"
+
+#include <string>
+#include <vector>
+
+namespace modestack::scene {
+
+/// One line of `modestack render --scene list`.
+struct SceneInfo {
+    std::string name;        ///< what --scene takes
+    std::string description; ///< one line: what moves, and when
+    int first_frame;         ///< first frame of the shot (inclusive)
+    int last_frame;          ///< last frame of the shot (inclusive)
+};
+
+/// The built-in scenes, in the order they are listed: static, orbit, switch, spin.
+const std::vector<SceneInfo>& builtin_scenes();
+
+/// Builds frame `frame` of the built-in scene `name`.
+/// Throws a usage error naming the available scenes when `name` is unknown, and one
+/// giving the scene's frame range when `frame` lies outside it.
+Scene make_builtin_scene(const std::string& name, int frame);
+
+/// The `switch` scene's small box crosses the floor in these frames only (inclusive).
+inline constexpr int kSwitchCrossingFirstFrame = 30;
+inline constexpr int kSwitchCrossingLastFrame = 36;
+/// The `switch` scene's light is in its second place from this frame on.
+inline constexpr int kSwitchLightJumpFrame = 25;
+
+/// A closed room (with a box in it) where every surface has albedo `albedo` and
+/// emits `emission` towards the room: the radiance everywhere is
+/// emission / (1 − albedo) (the white-furnace test). 0 ≤ albedo < 1.
+Scene make_furnace_scene(float albedo, float emission);
+
+} // namespace modestack::scene
