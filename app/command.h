@@ -23,5 +23,7 @@ const std::string& command_line();
 void set_command_line(int argc, char** argv);
 
 Subcommand add_info_command(CLI::App& parent);
+Subcommand add_denoise_command(CLI::App& parent);
+Subcommand add_render_command(CLI::App& parent);
 
 }  // namespace modestack::app

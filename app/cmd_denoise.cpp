@@ -1,0 +1,234 @@
+// `modestack denoise SEQ -o SEQ`: the temporal low-rank denoiser on an EXR
+// sequence. Validates every input and output before any work, runs the
+// streaming engine (core/denoise), writes each output frame atomically with
+// its sigma channels and provenance, and a JSON summary when asked.
+#include "app/command.h"
+#include "app/option_values.h"
+#include "app/run_context.h"
+#include "app/sequence_adapters.h"
+#include "core/common/error.h"
+#include "core/denoise/engine.h"
+#include "io/sequence.h"
+#include "io/sequence_reader.h"
+#include "io/text_output.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <sys/resource.h>
+
+namespace modestack::app {
+namespace {
+
+struct DenoiseOptions {
+    std::string input;
+    std::string output;
+    std::vector<std::string> layers;
+    std::string rank = "auto";
+    std::string rank_rule = "press";
+    std::string method = "auto";
+    std::string max_memory = "2G";
+    std::string frames;
+    std::string json_path;
+    std::string save_modes;
+    bool no_firefly_clamp = false;
+    double firefly_k = 6.0;
+    int sigma_radius = 2;
+    bool skip_existing = false;
+    CommonOptions common;
+};
+
+denoise::Settings make_settings(const DenoiseOptions& options)
+{
+    denoise::Settings settings;
+    settings.solver = denoise::parse_solver(options.method);
+    if (options.rank == "auto") {
+        settings.rank.rule = lowrank::parse_rank_rule(options.rank_rule);
+        if (settings.rank.rule == lowrank::RankRule::Fixed)
+            throw usage_error("--rank-rule fixed needs a number: use --rank N");
+    } else {
+        try {
+            size_t used = 0;
+            settings.rank.fixed_rank = std::stoi(options.rank, &used);
+            if (used != options.rank.size())
+                throw std::invalid_argument("trailing characters");
+        } catch (const std::exception&) {
+            throw usage_error(fmt::format("--rank '{}': write auto or a number of modes", options.rank));
+        }
+        settings.rank.rule = lowrank::RankRule::Fixed;
+    }
+    settings.outliers.fireflies = !options.no_firefly_clamp;
+    settings.outliers.firefly_k = options.firefly_k;
+    settings.sigma_radius = options.sigma_radius;
+    settings.max_memory_bytes = parse_memory_size(options.max_memory, "--max-memory");
+    return settings;
+}
+
+std::int64_t peak_resident_bytes()
+{
+    rusage usage{};
+    getrusage(RUSAGE_SELF, &usage);
+    return static_cast<std::int64_t>(usage.ru_maxrss) * 1024;
+}
+
+nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::SequenceReader& reader,
+                                    const denoise::Report& report, double seconds_total, int frames_written)
+{
+    nlohmann::ordered_json json;
+    json["version"] = version_string();
+    json["command"] = command_line();
+    json["input"] = reader.sequence().printf_pattern;
+    json["output"] = options.output;
+    json["frames"] = io::describe_frames(reader.sequence().frames);
+    json["frame_count"] = report.shape.frames;
+    json["frames_written"] = frames_written;
+    json["width"] = report.shape.width;
+    json["height"] = report.shape.height;
+    json["channels"] = reader.selected_channel_names();
+    nlohmann::ordered_json layers = nlohmann::ordered_json::array();
+    for (const auto& layer : reader.layers())
+        layers.push_back({{"layer", layer.name}, {"channels", layer.channel_names}, {"sigma", layer.sigma_names}});
+    json["layers"] = layers;
+    json["solver"] = report.solver;
+    json["passes"] = report.passes;
+    json["in_memory"] = report.plan.in_memory;
+    json["band_rows"] = report.plan.band_rows;
+    json["rank"] = {{"n", report.rank.rank},
+                    {"rule", report.rank.rule},
+                    {"reasoning", report.rank.reasoning},
+                    {"score", report.rank.score},
+                    {"noise_floor", report.rank.noise_floor},
+                    {"noise_sigma", report.rank.noise_sigma}};
+    json["singular_values"] = report.singular_values;
+    json["explained_variance"] = report.explained;
+    json["temporal_modes"] = report.temporal_modes;
+    json["outliers"] = {{"non_finite", report.outliers.non_finite}, {"fireflies", report.outliers.fireflies}};
+    json["seconds"] = {{"statistics", report.seconds_statistics},
+                       {"solve", report.seconds_solve},
+                       {"rebuild", report.seconds_rebuild},
+                       {"total", seconds_total}};
+    json["peak_memory_bytes"] = peak_resident_bytes();
+    json["max_memory_bytes"] = parse_memory_size(options.max_memory, "--max-memory");
+    return json;
+}
+
+int run_denoise(const DenoiseOptions& options)
+{
+    auto start = std::chrono::steady_clock::now();
+    denoise::Settings settings = make_settings(options);
+    RunContext context(options.common);
+
+    io::FrameSequence input = io::find_input_sequence(options.input, options.frames);
+    io::FrameSequence output = io::output_sequence(options.output, input.frames);
+    if (input.frames.size() < 3)
+        throw bad_input(options.input, fmt::format("denoising needs at least 3 frames, found {}", input.frames.size()));
+    if (settings.rank.rule == lowrank::RankRule::Fixed &&
+        settings.rank.fixed_rank >= static_cast<int>(input.frames.size()))
+        throw bad_input(options.input, fmt::format("--rank {} needs more than {} frames (use 1 to {})",
+                                                   settings.rank.fixed_rank, input.frames.size(),
+                                                   input.frames.size() - 1));
+    if (settings.rank.rule == lowrank::RankRule::Fixed && settings.rank.fixed_rank < 1)
+        throw usage_error(fmt::format("--rank {}: the number of modes must be at least 1", settings.rank.fixed_rank));
+    io::check_outputs(output.files, input.files);
+    if (!options.save_modes.empty())
+        io::check_outputs({(std::filesystem::path(options.save_modes) / "mode.01.exr").string()}, input.files);
+    io::SequenceReader reader(input, options.layers);
+
+    std::vector<std::string> paths = output.files;
+    int frames_written = 0;
+    for (std::string& path : paths) {
+        if (options.skip_existing && std::filesystem::exists(path))
+            path.clear();
+        else
+            ++frames_written;
+    }
+    if (frames_written == 0 && options.save_modes.empty()) {
+        context.progress().warn(fmt::format("every output of {} exists already (--skip-existing): nothing to do",
+                                            options.output));
+        return 0;
+    }
+
+    SequenceSource source(reader);
+    SequenceSink sink(reader, paths, options.save_modes);
+    sink.set_attributes({
+        io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
+        io::HeaderAttribute::of_text("modestack:command", command_line()),
+        io::HeaderAttribute::of_text("modestack:input", input.printf_pattern),
+        io::HeaderAttribute::of_text("modestack:frames", io::describe_frames(input.frames)),
+    });
+    denoise::Report report = denoise::run_denoise(source, sink, settings, context.progress());
+    sink.commit();
+    if (report.outliers.non_finite > 0)
+        context.progress().warn(fmt::format("{} NaN/Inf values in {} were replaced by their pixel's temporal median",
+                                            report.outliers.non_finite, options.input));
+    double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!options.save_modes.empty()) {
+        nlohmann::ordered_json modes;
+        modes["singular_values"] = report.singular_values;
+        modes["frames"] = input.frames;
+        modes["temporal_modes"] = report.temporal_modes;
+        io::write_text_file((std::filesystem::path(options.save_modes) / "temporal_modes.json").string(),
+                            modes.dump(2) + "\n");
+        std::string csv = "frame";
+        for (size_t j = 0; j < report.temporal_modes.size(); ++j)
+            csv += fmt::format(",mode{}", j + 1);
+        csv += "\n";
+        for (size_t t = 0; t < input.frames.size(); ++t) {
+            csv += std::to_string(input.frames[t]);
+            for (const auto& mode : report.temporal_modes)
+                csv += fmt::format(",{:.9g}", mode[t]);
+            csv += "\n";
+        }
+        io::write_text_file((std::filesystem::path(options.save_modes) / "temporal_modes.csv").string(), csv);
+    }
+    if (!options.json_path.empty())
+        io::write_text_file(options.json_path, summary_json(options, reader, report, seconds, frames_written).dump(2) + "\n");
+    if (!options.common.quiet)
+        std::fprintf(stderr, "denoised %d of %d frames with N = %d modes (%s rule, %s solver) in %.2f s\n",
+                     frames_written, report.shape.frames, report.rank.rank, report.rank.rule.c_str(),
+                     report.solver.c_str(), seconds);
+    return 0;
+}
+
+}  // namespace
+
+Subcommand add_denoise_command(CLI::App& parent)
+{
+    auto options = std::make_shared<DenoiseOptions>();
+    CLI::App* command = parent.add_subcommand(
+        "denoise", "Denoise the selected layers of an EXR sequence with its temporal low-rank modes");
+    command->add_option("SEQ", options->input, "Input frame sequence: name.####.exr, name.%04d.exr, name.@.exr")
+        ->required();
+    command->add_option("-o,--output", options->output, "Output frame sequence (never an input)")->required();
+    command->add_option("--layer", options->layers,
+                        "Layer to denoise: NAME.R/G/B or <prefix>.NAME.<ch> (Cycles DiffInd); repeatable. "
+                        "Default: the only RGB layer");
+    command->add_option("--rank", options->rank, "Number of modes N, or auto to let --rank-rule choose");
+    command->add_option("--rank-rule", options->rank_rule,
+                        "How auto chooses N: press (cross-validation), variance (the seed's rule), noise-floor "
+                        "(Gavish-Donoho)");
+    command->add_option("--method", options->method, "Solver: auto, gram (exact F x F eigenproblem) or rsvd "
+                                                      "(randomized SVD)");
+    command->add_option("--max-memory", options->max_memory,
+                        "Working memory: the shot is kept in memory if it fits, else streamed in bands (512M, 2G)");
+    command->add_option("--frames", options->frames, "Only these frames: 1-48, 1001-1100, 1-100x2, 1,3,7-9");
+    command->add_option("--json", options->json_path, "Write a JSON summary: N and why, spectrum, counts, timings");
+    command->add_option("--save-modes", options->save_modes,
+                        "Write the spatial modes (mode.NN.exr) and temporal weights (CSV, JSON) to this directory");
+    command->add_flag("--no-firefly-clamp", options->no_firefly_clamp,
+                      "Keep fireflies as they are (default: clamp them, spreading their energy over the pixel's "
+                      "frames)");
+    command->add_option("--firefly-k", options->firefly_k,
+                        "Firefly threshold: temporal median + k x 1.4826 x MAD of the pixel")
+        ->check(CLI::PositiveNumber);
+    command->add_option("--sigma-radius", options->sigma_radius, "Spatial pooling radius of sigma, in pixels")
+        ->check(CLI::NonNegativeNumber);
+    command->add_flag("--skip-existing", options->skip_existing,
+                      "Do not rewrite output frames that exist already (farm re-runs)");
+    add_common_options(*command, options->common);
+    return {command, [options] { return run_denoise(*options); }};
+}
+
+}  // namespace modestack::app

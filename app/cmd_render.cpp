@@ -1,0 +1,205 @@
+// `modestack render --scene NAME -o SEQ`: the companion path tracer. Renders the
+// frames of a built-in animated scene at any spp (with a fresh seed per frame,
+// or --fixed-seed), optionally only the pixels of a mask sequence, and writes
+// one multi-layer EXR per frame with Cycles-style AOV names and provenance.
+#include "app/command.h"
+#include "app/run_context.h"
+#include "core/common/error.h"
+#include "core/render/render.h"
+#include "core/scene/builtin_scenes.h"
+#include "io/frame_output.h"
+#include "io/mask_image.h"
+#include "io/sequence.h"
+#include "io/text_output.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <chrono>
+#include <cstdio>
+
+namespace modestack::app {
+namespace {
+
+struct RenderCommandOptions {
+    std::string scene = "orbit";
+    std::string output;
+    std::string frames;
+    std::string size = "320x240";
+    std::string mask;
+    std::string json_path;
+    render::RenderOptions render;
+    CommonOptions common;
+};
+
+void parse_size(const std::string& text, int& width, int& height)
+{
+    unsigned long long w = 0, h = 0;
+    char tail = 0;
+    if (std::sscanf(text.c_str(), "%llux%llu%c", &w, &h, &tail) != 2 || w == 0 || h == 0 || w > 65536 || h > 65536)
+        throw usage_error(fmt::format("--size '{}': write WIDTHxHEIGHT, e.g. 320x240 (each 1 to 65536)", text));
+    width = static_cast<int>(w);
+    height = static_cast<int>(h);
+}
+
+// Channel types written: colour layers in half as renderers write beauty passes;
+// geometry and the variance in float, where half's precision would hurt.
+const char* channel_type_for(const std::string& layer)
+{
+    return layer == "Depth" || layer == "Normal" || layer == "Position" || layer == "DiffIndVar" ? "float" : "half";
+}
+
+void write_frame(const std::string& path, const render::FrameAovs& aovs, const RenderCommandOptions& options,
+                 int frame)
+{
+    io::NewImageDescription image;
+    image.width = options.render.width;
+    image.height = options.render.height;
+    std::vector<render::AovLayer> layers = render::aov_layers(aovs);
+    for (const auto& layer : layers)
+        for (const auto& channel : layer.channel_names) {
+            image.channel_names.push_back(layer.name + "." + channel);
+            image.channel_types.push_back(channel_type_for(layer.name));
+        }
+    size_t pixels = static_cast<size_t>(image.width) * image.height, channels = image.channel_names.size();
+    std::vector<float> interleaved(pixels * channels);
+    size_t first = 0;
+    for (const auto& layer : layers) {
+        int count = layer.image->channels;
+        for (size_t p = 0; p < pixels; ++p)
+            for (int c = 0; c < count; ++c)
+                interleaved[p * channels + first + c] = layer.image->pixels[p * count + c];
+        first += count;
+    }
+    std::vector<io::HeaderAttribute> attributes{
+        io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
+        io::HeaderAttribute::of_text("modestack:command", command_line()),
+        io::HeaderAttribute::of_text("modestack:scene", options.scene),
+        io::HeaderAttribute::of_integer("modestack:frame", frame),
+        io::HeaderAttribute::of_integer("modestack:spp", options.render.spp),
+        io::HeaderAttribute::of_integer("modestack:seed", static_cast<long long>(options.render.seed)),
+        io::HeaderAttribute::of_integer("modestack:fixed_seed", options.render.fixed_seed ? 1 : 0),
+        io::HeaderAttribute::of_integer("modestack:max_depth", options.render.max_depth),
+        io::HeaderAttribute::of_real("modestack:render_seconds", aovs.stats.seconds),
+        io::HeaderAttribute::of_text("modestack:mask", options.mask),
+    };
+    io::FrameOutput output(path, image, attributes);
+    output.write_float_rows(0, image.height, interleaved.data());
+    output.commit();
+}
+
+int list_scenes()
+{
+    for (const auto& info : scene::builtin_scenes())
+        std::printf("%-8s frames %d-%d  %s\n", info.name.c_str(), info.first_frame, info.last_frame,
+                    info.description.c_str());
+    return 0;
+}
+
+int run_render(RenderCommandOptions& options)
+{
+    if (options.scene == "list")
+        return list_scenes();
+    if (options.output.empty())
+        throw usage_error("render needs -o SEQ (e.g. -o noisy/shot.####.exr)");
+    parse_size(options.size, options.render.width, options.render.height);
+    render::validate_render_options(options.render);
+    const scene::SceneInfo* info = nullptr;
+    for (const auto& candidate : scene::builtin_scenes())
+        if (candidate.name == options.scene)
+            info = &candidate;
+    if (!info)
+        scene::make_builtin_scene(options.scene, 1);  // throws the error that lists the scenes
+    std::vector<int> frames = options.frames.empty()
+                                  ? io::parse_frame_range(fmt::format("{}-{}", info->first_frame, info->last_frame))
+                                  : io::parse_frame_range(options.frames);
+    for (int frame : frames)
+        if (frame < info->first_frame || frame > info->last_frame)
+            throw usage_error(fmt::format("--frames: scene '{}' has frames {}-{}, not {}", options.scene,
+                                          info->first_frame, info->last_frame, frame));
+    io::FrameSequence output = io::output_sequence(options.output, frames);
+    std::vector<std::string> mask_files;
+    if (!options.mask.empty()) {
+        mask_files = io::find_input_sequence(options.mask, io::describe_frames(frames)).files;
+        for (const std::string& file : mask_files)  // check every mask before the first frame
+            io::read_mask(file, options.render.width, options.render.height);
+    }
+    io::check_outputs(output.files, mask_files);
+
+    RunContext context(options.common);
+    context.progress().begin(fmt::format("rendering {} frames of {} at {} spp", frames.size(), options.scene,
+                                         options.render.spp),
+                             static_cast<std::int64_t>(frames.size()) * render::tile_count(options.render));
+    nlohmann::ordered_json per_frame = nlohmann::ordered_json::array();
+    long long paths = 0, rays = 0;
+    double seconds = 0;
+    render::FrameAovs aovs;
+    for (size_t i = 0; i < frames.size(); ++i) {
+        std::vector<std::uint8_t> mask;
+        if (!mask_files.empty())
+            mask = io::read_mask(mask_files[i], options.render.width, options.render.height);
+        scene::Scene scene = scene::make_builtin_scene(options.scene, frames[i]);
+        render::render_frame(scene, frames[i], options.render, mask.empty() ? nullptr : mask.data(), aovs,
+                             context.progress());
+        write_frame(output.files[i], aovs, options, frames[i]);
+        paths += aovs.stats.paths;
+        rays += aovs.stats.rays;
+        seconds += aovs.stats.seconds;
+        per_frame.push_back({{"frame", frames[i]},
+                             {"seconds", aovs.stats.seconds},
+                             {"paths", aovs.stats.paths},
+                             {"rays", aovs.stats.rays},
+                             {"paths_per_second", aovs.stats.paths_per_second()},
+                             {"rays_per_second", aovs.stats.rays_per_second()}});
+    }
+    context.progress().end();
+    if (!options.json_path.empty()) {
+        nlohmann::ordered_json json;
+        json["version"] = version_string();
+        json["command"] = command_line();
+        json["scene"] = options.scene;
+        json["output"] = output.printf_pattern;
+        json["frames"] = io::describe_frames(frames);
+        json["width"] = options.render.width;
+        json["height"] = options.render.height;
+        json["spp"] = options.render.spp;
+        json["seed"] = options.render.seed;
+        json["fixed_seed"] = options.render.fixed_seed;
+        json["max_depth"] = options.render.max_depth;
+        json["render_seconds"] = seconds;
+        json["paths"] = paths;
+        json["rays"] = rays;
+        json["paths_per_second"] = seconds > 0 ? paths / seconds : 0.0;
+        json["rays_per_second"] = seconds > 0 ? rays / seconds : 0.0;
+        json["per_frame"] = per_frame;
+        io::write_text_file(options.json_path, json.dump(2) + "\n");
+    }
+    return 0;
+}
+
+}  // namespace
+
+Subcommand add_render_command(CLI::App& parent)
+{
+    auto options = std::make_shared<RenderCommandOptions>();
+    CLI::App* command = parent.add_subcommand(
+        "render", "Render a built-in animated scene with the path tracer (one multi-layer EXR per frame)");
+    command->add_option("--scene", options->scene, "Built-in scene: static, orbit, switch, spin (list: print them)");
+    command->add_option("-o,--output", options->output, "Output frame sequence, e.g. noisy/shot.####.exr");
+    command->add_option("--frames", options->frames, "Frames to render (default: all of the scene's frames)");
+    command->add_option("--spp", options->render.spp, "Samples per pixel")->check(CLI::PositiveNumber);
+    command->add_option("--size", options->size, "Image size WIDTHxHEIGHT");
+    command->add_option("--seed", options->render.seed, "Seed of the sample hash");
+    command->add_flag("--fixed-seed", options->render.fixed_seed,
+                      "Same random numbers in every frame (temporally correlated noise; a known failure case of "
+                      "the denoiser)");
+    command->add_option("--max-depth", options->render.max_depth, "Maximum number of bounces (1 = direct light)")
+        ->check(CLI::PositiveNumber);
+    command->add_option("--mask", options->mask,
+                        "Render only the pixels where this mask sequence's first channel is non-zero");
+    command->add_option("--json", options->json_path, "Write per-frame times, paths/s and rays/s as JSON");
+    add_common_options(*command, options->common);
+    return {command, [options] { return run_render(*options); }};
+}
+
+}  // namespace modestack::app

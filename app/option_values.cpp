@@ -1,0 +1,31 @@
+#include "app/option_values.h"
+
+#include "core/common/error.h"
+
+#include <fmt/format.h>
+
+#include <cctype>
+#include <cstdlib>
+
+namespace modestack::app {
+
+std::int64_t parse_memory_size(const std::string& text, const std::string& option)
+{
+    char* end = nullptr;
+    double value = std::strtod(text.c_str(), &end);
+    std::string unit = end ? std::string(end) : std::string();
+    double scale = 0;
+    if (unit.empty() || unit == "B")
+        scale = 1;
+    else if (unit == "K" || unit == "KB" || unit == "KiB")
+        scale = 1024.0;
+    else if (unit == "M" || unit == "MB" || unit == "MiB")
+        scale = 1024.0 * 1024;
+    else if (unit == "G" || unit == "GB" || unit == "GiB")
+        scale = 1024.0 * 1024 * 1024;
+    if (end == text.c_str() || scale == 0 || !(value > 0))
+        throw usage_error(fmt::format("{} '{}': not a memory size (examples: 512M, 2G)", option, text));
+    return static_cast<std::int64_t>(value * scale);
+}
+
+}  // namespace modestack::app

@@ -1,0 +1,13 @@
+// Parsing of option values that CLI11 does not know: memory sizes.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace modestack::app {
+
+/// Parses "512M", "2G", "1.5G", "800K" or plain bytes (binary units, K = 1024).
+/// Throws a usage error naming `option` when malformed or not positive.
+std::int64_t parse_memory_size(const std::string& text, const std::string& option);
+
+}  // namespace modestack::app

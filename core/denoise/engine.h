@@ -1,0 +1,66 @@
+// The temporal low-rank denoiser as a stream (DESIGN.md, "The denoiser as a
+// stream"): pass 1 reads bands of every frame, cleans NaN/Inf and fireflies and
+// accumulates the Gram matrix XᵀX; the small eigenproblem (or the randomized SVD)
+// gives the temporal modes; a rank rule picks N; pass 2 reads the bands again
+// (with halo rows), rebuilds every frame from the first N modes and estimates the
+// standard error of each rebuilt value. When the shot fits the memory budget it
+// is read once and kept. Results are bit-identical for any thread count and for
+// streaming versus in-memory runs.
+#pragma once
+
+#include "core/common/progress.h"
+#include "core/denoise/band_plan.h"
+#include "core/denoise/frame_stream.h"
+#include "core/lowrank/outliers.h"
+#include "core/lowrank/randomized_svd.h"
+#include "core/lowrank/rank_rule.h"
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace modestack::denoise {
+
+/// How the temporal modes are found.
+enum class Solver { Auto, Gram, RandomizedSvd };
+
+/// Parses "auto", "gram" or "rsvd"; throws a usage error otherwise.
+Solver parse_solver(const std::string& name);
+/// "gram" or "rsvd".
+std::string solver_name(Solver solver);
+
+/// Every setting of a denoise run.
+struct Settings {
+    Solver solver = Solver::Auto;
+    lowrank::RankRuleOptions rank;  ///< rule (default press) or fixed N
+    lowrank::OutlierOptions outliers;
+    int sigma_radius = 2;  ///< spatial pooling radius of the sigma estimate (pixels)
+    std::int64_t max_memory_bytes = std::int64_t(2) << 30;
+    /// Randomized SVD: modes computed (the rank rule chooses among them).
+    int randomized_modes = 24;
+    lowrank::RandomizedSvdOptions randomized;
+    /// Auto picks the randomized SVD from this many frames on (measured in bench/).
+    int randomized_from_frames = 400;
+};
+
+/// What a run did and found, for the JSON summary and the report.
+struct Report {
+    ShotShape shape;
+    BandPlan plan;
+    std::string solver;
+    int passes = 0;                       ///< reads of the whole shot
+    lowrank::RankDecision rank;
+    std::vector<double> singular_values;  ///< σ_j, descending
+    std::vector<double> explained;        ///< σ_j² / total energy, per mode
+    std::vector<std::vector<double>> temporal_modes;  ///< pt(t, j) for j < N: [j][t]
+    lowrank::OutlierCounts outliers;
+    double seconds_statistics = 0;  ///< pass 1 (read + clean + Gram)
+    double seconds_solve = 0;       ///< eigensolve or randomized SVD, and the rank rule
+    double seconds_rebuild = 0;     ///< pass 2 (read + rebuild + sigma + write)
+};
+
+/// Denoises `source` into `sink`. Throws modestack::Error on bad settings
+/// (fewer than 3 frames, rank out of range, memory too small) and cancellation.
+Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& settings, Progress& progress);
+
+}  // namespace modestack::denoise

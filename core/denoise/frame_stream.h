@@ -1,0 +1,57 @@
+// The two ends the denoise engine talks to, so that it knows nothing of files:
+// a FrameSource hands out rows of the selected channels of every frame, a
+// FrameSink receives the rebuilt rows and their sigma. The app adapts io's
+// SequenceReader and FrameOutput to them; tests use plain memory.
+#pragma once
+
+#include <string>
+
+namespace modestack::denoise {
+
+/// Size of a shot as the engine sees it.
+struct ShotShape {
+    int frames = 0;
+    int width = 0;
+    int height = 0;
+    int channels = 0;  ///< selected channels per pixel (3 per RGB layer)
+};
+
+/// Rows of the selected channels of a shot.
+class FrameSource {
+public:
+    virtual ~FrameSource() = default;
+    virtual ShotShape shape() const = 0;
+    /// Reads rows [row_begin, row_end) of frame `frame_index` as float,
+    /// interleaved [row][x][channel]. Called concurrently for different frames.
+    virtual void read_rows(int frame_index, int row_begin, int row_end, float* destination) = 0;
+};
+
+/// What is decided before the first rebuilt row: outputs record it.
+struct RebuildStart {
+    int rank = 0;
+    std::string rank_rule;
+    std::string solver;
+};
+
+/// Receives the result, band after band in increasing row order.
+class FrameSink {
+public:
+    virtual ~FrameSink() = default;
+    /// Called once, after the modes and N are known and before any write.
+    virtual void begin(const RebuildStart& start) { (void)start; }
+    /// Rows [row_begin, row_end) of frame `frame_index`: the rebuilt values and
+    /// their standard error, both laid out like the source's rows. Called
+    /// concurrently for different frames, never for the same frame at once.
+    virtual void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
+                            const float* sigma) = 0;
+    /// Rows of the spatial modes ps(x, y, j) (j < modes), [mode][row][x][channel].
+    /// Only called when the sink asks for modes.
+    virtual void write_mode_rows(int row_begin, int row_end, int modes, const float* spatial_modes)
+    {
+        (void)row_begin, (void)row_end, (void)modes, (void)spatial_modes;
+    }
+    /// Whether write_mode_rows should be called.
+    virtual bool wants_modes() const { return false; }
+};
+
+}  // namespace modestack::denoise

@@ -1,0 +1,3 @@
+target_sources(modestack_core PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/band_plan.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/engine.cpp)

@@ -1,0 +1,252 @@
+// End-to-end: `modestack denoise` on generated multi-layer sequences with a known
+// clean signal: it removes noise, keeps every other channel bit-exactly, writes
+// sigma and provenance, is deterministic, streams and keeps the shot alike, and
+// refuses bad input with one line and nothing written.
+#include "tests/tools/testkit.h"
+
+#include <doctest/doctest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+using namespace modestack;
+using testkit::run_modestack;
+using testkit::TempDir;
+
+namespace {
+constexpr int kWidth = 40, kHeight = 36, kFrames = 24;
+
+// A rank-2 "lighting" signal: a fixed spatial pattern times a smooth temporal
+// weight, plus a second pattern that fades in.
+float clean_value(int frame, int x, int y, int c)
+{
+    float t = static_cast<float>(frame) / kFrames;
+    float mode1 = 0.6f + 0.3f * std::sin(0.2f * x + 0.1f * c) * std::cos(0.15f * y);
+    float mode2 = 0.4f * (x > kWidth / 2 ? 1.0f : 0.2f) + 0.05f * c;
+    return mode1 * (1.0f + 0.2f * t) + mode2 * t * t;
+}
+
+float noise(int frame, int x, int y, int c)
+{
+    std::mt19937 generator(static_cast<unsigned>(((frame * 131 + x) * 977 + y) * 7 + c));
+    std::normal_distribution<float> normal(0.0f, 0.15f);
+    return normal(generator);
+}
+
+testkit::ExrLayout layout()
+{
+    testkit::ExrLayout result;
+    result.width = kWidth;
+    result.height = kHeight;
+    result.channel_names = {"ViewLayer.Combined.R", "ViewLayer.Combined.G", "ViewLayer.Combined.B",
+                            "ViewLayer.Combined.A", "ViewLayer.DiffInd.R",  "ViewLayer.DiffInd.G",
+                            "ViewLayer.DiffInd.B",  "ViewLayer.Depth.Z"};
+    result.channel_types = {"half", "half", "half", "half", "float", "float", "float", "float"};
+    result.attributes = {{"renderer", "synthetic"}};
+    return result;
+}
+
+// Channel c of the layout: DiffInd (4..6) is clean + noise; the rest are other data.
+float noisy_value(int frame, int x, int y, int c)
+{
+    if (c >= 4 && c <= 6)
+        return clean_value(frame, x, y, c - 4) + noise(frame, x, y, c - 4);
+    return 0.01f * x + 0.02f * y + 0.1f * c + frame;
+}
+
+const std::vector<std::string> kDiffInd{"ViewLayer.DiffInd.R", "ViewLayer.DiffInd.G", "ViewLayer.DiffInd.B"};
+
+double mse_against_clean(const std::string& pattern, int frames)
+{
+    double sum = 0;
+    size_t count = 0;
+    for (int frame = 1; frame <= frames; ++frame) {
+        char name[4096];
+        std::snprintf(name, sizeof name, pattern.c_str(), frame);
+        std::vector<float> values = testkit::read_channels(name, kDiffInd);
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    double d = values[(y * kWidth + x) * 3 + c] - clean_value(frame, x, y, c);
+                    sum += d * d;
+                    ++count;
+                }
+    }
+    return sum / count;
+}
+
+std::vector<int> all_frames()
+{
+    std::vector<int> frames;
+    for (int f = 1; f <= kFrames; ++f)
+        frames.push_back(f);
+    return frames;
+}
+
+std::string slurp(const std::string& path)
+{
+    std::ifstream file(path);
+    std::stringstream text;
+    text << file.rdbuf();
+    return text.str();
+}
+}  // namespace
+
+TEST_CASE("denoise removes most of the noise, writes sigma, keeps other channels bit-exact and records provenance")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    auto result = run_modestack("denoise " + dir.file("in.####.exr") + " -o " + dir.file("out/den.####.exr") +
+                                " --layer DiffInd --json " + dir.file("summary.json") + " -q");
+    REQUIRE_MESSAGE(result.exit_code == 0, result.err);
+    double noisy = mse_against_clean(dir.file("in.%04d.exr"), kFrames);
+    double denoised = mse_against_clean(dir.file("out/den.%04d.exr"), kFrames);
+    MESSAGE("MSE noisy " << noisy << ", denoised " << denoised);
+    // A rank-2 rebuild keeps about 2/F of the white noise: expect at least 5x less error.
+    CHECK(denoised < noisy / 5);
+
+    auto json = nlohmann::json::parse(slurp(dir.file("summary.json")));
+    CHECK(json["rank"]["n"] == 2);
+    CHECK(json["frame_count"] == kFrames);
+    CHECK(json["solver"] == "gram");
+    CHECK(json["singular_values"].size() == static_cast<size_t>(kFrames));
+    CHECK(json["outliers"]["non_finite"] == 0);
+
+    std::string first = dir.file("out/den.0001.exr");
+    std::vector<std::string> names = testkit::read_channel_names(first);
+    CHECK(names.size() == 11);
+    std::vector<float> sigma =
+        testkit::read_channels(first, {"ViewLayer.DiffInd.sigma.R", "ViewLayer.DiffInd.sigma.G", "ViewLayer.DiffInd.sigma.B"});
+    double mean_sigma = 0;
+    for (float s : sigma)
+        mean_sigma += s / sigma.size();
+    // Noise 0.15 per frame, rank 2 of 24 frames: the rebuilt value's error is about 0.15*sqrt(2/24) = 0.043.
+    CHECK(mean_sigma > 0.02);
+    CHECK(mean_sigma < 0.09);
+    std::vector<std::string> others{"ViewLayer.Combined.R", "ViewLayer.Combined.A", "ViewLayer.Depth.Z"};
+    CHECK(testkit::read_channels(first, others) == testkit::read_channels(dir.file("in.0001.exr"), others));
+    CHECK(testkit::read_string_attribute(first, "renderer") == "synthetic");
+    CHECK(testkit::read_string_attribute(first, "modestack:rank_rule") == "press");
+    CHECK(testkit::read_string_attribute(first, "modestack:command").find("denoise") != std::string::npos);
+}
+
+TEST_CASE("denoise output pixels are identical for --threads 1 and 2 and for streamed and kept shots")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    std::string input = dir.file("in.####.exr") + " --layer DiffInd -q ";
+    REQUIRE(run_modestack("denoise " + input + "--threads 1 -o " + dir.file("a/d.####.exr")).exit_code == 0);
+    REQUIRE(run_modestack("denoise " + input + "--threads 2 -o " + dir.file("b/d.####.exr")).exit_code == 0);
+    // 40 px * 3 channels * 24 frames * 4 bytes * ~3 buffers = 35 KB per row: 1M streams in bands of 16 rows.
+    auto streamed = run_modestack("denoise " + input + "--max-memory 1M --json " + dir.file("c.json") + " -o " +
+                                  dir.file("c/d.####.exr"));
+    REQUIRE_MESSAGE(streamed.exit_code == 0, streamed.err);
+    auto json = nlohmann::json::parse(slurp(dir.file("c.json")));
+    CHECK(json["in_memory"] == false);
+    CHECK(json["passes"] == 2);
+    for (int frame : {1, 13, 24}) {
+        char name[64];
+        std::snprintf(name, sizeof name, "/d.%04d.exr", frame);
+        auto a = testkit::read_native(dir.path() + "/a" + name);
+        CHECK(a == testkit::read_native(dir.path() + "/b" + name));
+        CHECK(a == testkit::read_native(dir.path() + "/c" + name));
+    }
+}
+
+TEST_CASE("denoise --method rsvd agrees with gram, --rank N is honoured, --save-modes writes modes and weights")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    std::string input = "denoise " + dir.file("in.####.exr") + " --layer DiffInd -q --rank 2 ";
+    REQUIRE(run_modestack(input + "--method gram -o " + dir.file("g/d.####.exr")).exit_code == 0);
+    REQUIRE(run_modestack(input + "--method rsvd --save-modes " + dir.file("modes") + " -o " + dir.file("r/d.####.exr"))
+                .exit_code == 0);
+    std::vector<float> gram = testkit::read_channels(dir.file("g/d.0007.exr"), kDiffInd);
+    std::vector<float> rsvd = testkit::read_channels(dir.file("r/d.0007.exr"), kDiffInd);
+    double largest = 0;
+    for (size_t i = 0; i < gram.size(); ++i)
+        largest = std::max(largest, static_cast<double>(std::fabs(gram[i] - rsvd[i])));
+    CHECK(largest < 1e-4);
+    CHECK(testkit::read_string_attribute(dir.file("r/d.0007.exr"), "modestack:solver") == "rsvd");
+    CHECK(testkit::list_directory(dir.file("modes")) ==
+          std::vector<std::string>{"mode.01.exr", "mode.02.exr", "temporal_modes.csv", "temporal_modes.json"});
+    std::string csv = slurp(dir.file("modes/temporal_modes.csv"));
+    CHECK(csv.rfind("frame,mode1,mode2\n", 0) == 0);
+    CHECK(std::count(csv.begin(), csv.end(), '\n') == kFrames + 1);
+}
+
+TEST_CASE("denoise counts and replaces NaN/Inf, and --skip-existing leaves finished frames alone")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), [](int frame, int x, int y, int c) {
+        if (frame == 5 && x == 3 && y == 4 && c == 4)
+            return std::nanf("");
+        if (frame == 6 && x == 1 && y == 1 && c == 5)
+            return INFINITY;
+        return noisy_value(frame, x, y, c);
+    });
+    auto result = run_modestack("denoise " + dir.file("in.####.exr") + " --layer DiffInd -o " +
+                                dir.file("out/d.####.exr") + " --json " + dir.file("s.json"));
+    REQUIRE(result.exit_code == 0);
+    CHECK(result.err.find("2 NaN/Inf values") != std::string::npos);
+    CHECK(nlohmann::json::parse(slurp(dir.file("s.json")))["outliers"]["non_finite"] == 2);
+    for (float value : testkit::read_channels(dir.file("out/d.0005.exr"), kDiffInd))
+        CHECK(std::isfinite(value));
+
+    std::remove(dir.file("out/d.0003.exr").c_str());
+    auto second = run_modestack("denoise " + dir.file("in.####.exr") + " --layer DiffInd --skip-existing -q -o " +
+                                dir.file("out/d.####.exr") + " --json " + dir.file("s2.json"));
+    REQUIRE(second.exit_code == 0);
+    CHECK(nlohmann::json::parse(slurp(dir.file("s2.json")))["frames_written"] == 1);
+    CHECK(testkit::list_directory(dir.file("out")).size() == kFrames);
+}
+
+TEST_CASE("denoise bad input: one line naming the problem, documented exit code, nothing written")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    testkit::write_sequence(dir.file("two.%04d.exr"), {1, 2}, layout(), noisy_value);
+    testkit::write_sequence(dir.file("mix.%04d.exr"), {1, 2, 3}, layout(), noisy_value);
+    testkit::ExrLayout smaller = layout();
+    smaller.height = kHeight - 1;
+    testkit::write_sequence(dir.file("mix.%04d.exr"), {4}, smaller, noisy_value);
+    testkit::write_sequence(dir.file("trunc.%04d.exr"), {1, 2, 3}, layout(), noisy_value);
+    {
+        std::string bytes = slurp(dir.file("trunc.0002.exr"));
+        std::ofstream(dir.file("trunc.0002.exr"), std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() / 2);
+    }
+    std::string out = " -q -o " + dir.file("out/d.####.exr");
+    struct Case {
+        std::string arguments;
+        int exit_code;
+        std::string message;
+    };
+    std::vector<Case> cases{
+        {dir.file("two.####.exr") + " --layer DiffInd" + out, 1, "two.####.exr: denoising needs at least 3 frames"},
+        {dir.file("in.####.exr") + " --layer DiffInd --rank 24" + out, 1, "--rank 24 needs more than 24 frames"},
+        {dir.file("in.####.exr") + " --layer DiffInd --rank 0" + out, 2, "--rank 0"},
+        {dir.file("in.####.exr") + " --layer GlossInd" + out, 1, "in.0001.exr: layer 'GlossInd' not found"},
+        {dir.file("in.####.exr") + out, 1, "several RGB layers; choose with --layer"},
+        {dir.file("mix.####.exr") + " --layer DiffInd" + out, 1, "mix.0004.exr: data window 40x35 differs"},
+        {dir.file("trunc.####.exr") + " --layer DiffInd" + out, 1, "trunc.0002.exr: cannot read rows"},
+        {dir.file("in.####.exr") + " --layer DiffInd -q -o " + dir.file("in.####.exr"), 2, "is also an input"},
+        {dir.file("in.####.exr") + " --layer DiffInd -q -o " + dir.file("in.0001.exr") + "/d.####.exr", 1,
+         "output directory"},
+        {dir.file("in.####.exr") + " --layer DiffInd --max-memory lots" + out, 2, "--max-memory 'lots'"},
+        {dir.file("in.####.exr") + " --layer DiffInd --method svd" + out, 2, "--method 'svd'"},
+        {dir.file("in.####.exr") + " --layer DiffInd --rank-rule magic" + out, 2, "magic"},
+    };
+    for (const Case& c : cases) {
+        CAPTURE(c.arguments);
+        auto result = run_modestack("denoise " + c.arguments);
+        CHECK(result.exit_code == c.exit_code);
+        CHECK(result.err.find('\n') == result.err.size() - 1);
+        CHECK_MESSAGE(result.err.find(c.message) != std::string::npos, result.err);
+        CHECK_FALSE(std::ifstream(dir.file("out/d.0001.exr")).good());
+        if (std::ifstream(dir.file("out")).good())
+            CHECK(testkit::list_directory(dir.file("out")).empty());
+    }
+}
