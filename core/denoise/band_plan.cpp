@@ -10,9 +10,10 @@ namespace modestack::denoise {
 
 std::int64_t bytes_per_band_row(const ShotShape& shape, int modes)
 {
-    // Input, rebuilt and sigma for every frame, plus the spatial coefficients.
+    // Input, rebuilt, sigma and sigma's noise power for every frame, plus the
+    // spatial coefficients.
     std::int64_t samples = static_cast<std::int64_t>(shape.width) * shape.channels;
-    return samples * sizeof(float) * (3 * static_cast<std::int64_t>(shape.frames) + modes);
+    return samples * sizeof(float) * (4 * static_cast<std::int64_t>(shape.frames) + modes);
 }
 
 BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int halo_rows, int modes)

@@ -44,7 +44,8 @@ public:
         int largest_rank = m_settings.rank.rule == lowrank::RankRule::Fixed ? m_settings.rank.fixed_rank
                                                                             : std::min(m_shape.frames - 1, 32);
         m_report.shape = m_shape;
-        m_report.plan = plan_bands(m_shape, m_settings.max_memory_bytes, m_settings.sigma_radius, largest_rank);
+        // Sigma's window reads radius + 1 rows around a pixel (see confidence.h).
+        m_report.plan = plan_bands(m_shape, m_settings.max_memory_bytes, m_settings.sigma_radius + 1, largest_rank);
         Solver solver = m_settings.solver;
         if (solver == Solver::Auto)
             solver = m_shape.frames >= m_settings.randomized_from_frames ? Solver::RandomizedSvd : Solver::Gram;

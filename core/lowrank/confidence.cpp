@@ -14,27 +14,55 @@
 namespace modestack::lowrank {
 namespace {
 
-// Writes the windowed mean of r² of frame t for the output rows into sigma's frame t.
-void windowed_residual_power(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
-                             int radius, int valid_y0, int valid_y1, int t, MutableBandView sigma,
-                             std::vector<double>& column_sum)
+// Residual r = x − x̂ of frame t at (y, k), k = x·channels + c.
+struct Residual {
+    const float* noisy;
+    const float* rebuilt;
+    std::int64_t row_length;
+    double operator()(int y, std::int64_t k) const
+    {
+        std::int64_t i = y * row_length + k;
+        return static_cast<double>(noisy[i]) - rebuilt[i];
+    }
+};
+
+// The residual's white-noise part: r minus the mean of its 4-neighbours (clipped
+// at the band), squared and divided by the white-noise gain 1 + 1/n, so that its
+// expectation is the residual's noise variance σ²(1 − h_t). Lighting the modes miss
+// is smooth in space and mostly cancels here, unlike in r² itself.
+double high_pass_power(const Residual& residual, const ImageBandShape& shape, int y, std::int64_t k)
+{
+    const int x = static_cast<int>(k / shape.channels);
+    double neighbours = 0;
+    int count = 0;
+    if (x > 0)
+        neighbours += residual(y, k - shape.channels), ++count;
+    if (x + 1 < shape.width)
+        neighbours += residual(y, k + shape.channels), ++count;
+    if (y > 0)
+        neighbours += residual(y - 1, k), ++count;
+    if (y + 1 < shape.height)
+        neighbours += residual(y + 1, k), ++count;
+    if (count == 0)
+        return residual(y, k) * residual(y, k);
+    const double difference = residual(y, k) - neighbours / count;
+    return difference * difference / (1.0 + 1.0 / count);
+}
+
+// Writes the mean over the (2·radius+1)² window (clipped at the band) of
+// sample(y, k) for the output rows of frame t into `out`'s frame t.
+template <typename Sample>
+void windowed_mean(const Sample& sample, const ImageBandShape& shape, int radius, int valid_y0, int valid_y1,
+                   float* out_frame, std::vector<double>& column_sum)
 {
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
-    const float* noisy_frame = noisy.data + t * noisy.frame_stride;
-    const float* rebuilt_frame = rebuilt.data + t * rebuilt.frame_stride;
-    float* out_frame = sigma.data + t * sigma.frame_stride;
     for (int y = valid_y0; y < valid_y1; ++y) {
         const int y_first = std::max(0, y - radius);
         const int y_last = std::min(shape.height - 1, y + radius);
         std::fill(column_sum.begin(), column_sum.end(), 0.0);
-        for (int source_y = y_first; source_y <= y_last; ++source_y) {
-            const std::int64_t offset = source_y * row_length;
-            for (std::int64_t k = 0; k < row_length; ++k) {
-                const double residual =
-                    static_cast<double>(noisy_frame[offset + k]) - rebuilt_frame[offset + k];
-                column_sum[static_cast<std::size_t>(k)] += residual * residual;
-            }
-        }
+        for (int source_y = y_first; source_y <= y_last; ++source_y)
+            for (std::int64_t k = 0; k < row_length; ++k)
+                column_sum[static_cast<std::size_t>(k)] += sample(source_y, k);
         const int rows_in_window = y_last - y_first + 1;
         float* out_row = out_frame + (y - valid_y0) * row_length;
         for (int x = 0; x < shape.width; ++x) {
@@ -73,13 +101,19 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
     if (sigma.rows == 0)
         return;
 
-    // Stage 1: m_t per pixel and channel, stored in sigma's own frames.
+    // Stage 1: per frame, the windowed mean residual (into sigma) and the windowed
+    // high-pass power (into noise_power), both per pixel and channel.
     throw_if_cancelled();
+    std::vector<float> noise_power(static_cast<std::size_t>(sigma.rows) * frames);
     tbb::parallel_for(tbb::blocked_range<int>(0, frames, 1), [&](const tbb::blocked_range<int>& range) {
         std::vector<double> column_sum(static_cast<std::size_t>(row_length));
-        for (int t = range.begin(); t != range.end(); ++t)
-            windowed_residual_power(noisy, rebuilt, shape, options.radius, valid_y0, valid_y1, t, sigma,
-                                    column_sum);
+        for (int t = range.begin(); t != range.end(); ++t) {
+            Residual residual{noisy.data + t * noisy.frame_stride, rebuilt.data + t * rebuilt.frame_stride, row_length};
+            windowed_mean([&](int y, std::int64_t k) { return residual(y, k); }, shape,
+                          options.radius, valid_y0, valid_y1, sigma.data + t * sigma.frame_stride, column_sum);
+            windowed_mean([&](int y, std::int64_t k) { return high_pass_power(residual, shape, y, k); }, shape,
+                          options.radius, valid_y0, valid_y1, noise_power.data() + t * sigma.rows, column_sum);
+        }
     });
 
     // Stage 2: s², bias and sigma per sample, summing over frames in frame order.
@@ -93,14 +127,16 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
             const int window_width = std::min(shape.width - 1, x + radius) - std::max(0, x - radius) + 1;
             const int window_height = std::min(shape.height - 1, y + radius) - std::max(0, y - radius) + 1;
             const double window_size = static_cast<double>(window_width) * window_height;
-            const double margin = 1.0 + options.bias_significance * std::sqrt(2.0 / window_size);
             double energy = 0;
             for (int t = 0; t < frames; ++t)
-                energy += sigma.at(i, t);
+                energy += noise_power[static_cast<std::size_t>(t * sigma.rows + i)];
             const double noise_variance = energy / degrees_of_freedom;
             for (int t = 0; t < frames; ++t) {
-                const double power = sigma.at(i, t);
-                const double bias = std::max(0.0, power - noise_variance * (1.0 - leverages(t)) * margin);
+                // The windowed mean of pure noise has variance s²(1 − h_t)/|W|;
+                // what the squared mean holds beyond that is coherent missed content.
+                const double mean = sigma.at(i, t);
+                const double bias =
+                    std::max(0.0, mean * mean - options.bias_significance * noise_variance * (1.0 - leverages(t)) / window_size);
                 sigma.at(i, t) = static_cast<float>(std::sqrt(noise_variance * leverages(t) + bias));
             }
         }

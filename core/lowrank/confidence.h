@@ -6,19 +6,25 @@
 // above the noise). The refine step re-renders where sigma is high.
 //
 // Estimator, for pixel p, channel c, frame t, window W = (2·radius+1)² pixels around
-// p clipped to the band, N modes, F frames, leverages h_t = Σ_{j≤N} V_tj²:
-//   m_t  = mean_{q∈W} r_{q,c,t}²                        (windowed residual power)
-//   s²   = Σ_t m_t / (F − N)                             (noise variance: residual energy
-//                                                         over F − N degrees of freedom)
-//   b_t² = max(0, m_t − s²(1 − h_t)·(1 + z·sqrt(2/|W|))) (model bias: residual power beyond
-//                                                         what noise explains)
-//   sigma_t = sqrt(s²·h_t + b_t²)                        (noise kept by the projection,
-//                                                         h_t = Var(x̂_t)/s², plus bias)
-// z (bias_significance) discounts the chance excess of m_t over its expectation
-// s²(1 − h_t): m_t averages |W| squared residuals, so its relative spread under pure
-// noise is sqrt(2/|W|). With z = 0 (the plain formula) that chance excess alone
-// (≈ 0.11·s² for a 5×5 window) outweighs the real error s²·h_t ≈ s²·N/F and sigma
-// overstates the error everywhere; see tests/lowrank/test_confidence.cpp.
+// p clipped to the band, N modes, F frames, leverages h_t = Σ_{j≤N} V_tj², residual
+// r = x − x̂:
+//   d_t  = r_{q,c,t} − mean of its 4-neighbours            (spatial high-pass of r)
+//   s²   = Σ_t mean_{q∈W} d_t² / (1 + 1/4) / (F − N)       (noise variance per frame)
+//   μ_t  = mean_{q∈W} r_{q,c,t}                            (local mean residual)
+//   b_t² = max(0, μ_t² − z·s²(1 − h_t)/|W|)                (missed content: the part of μ_t²
+//                                                           noise cannot explain)
+//   sigma_t = sqrt(s²·h_t + b_t²)                          (noise kept by the projection,
+//                                                           Var(x̂_t) = s²·h_t, plus bias)
+// Why a high-pass for s²: lighting the modes miss in every frame (a light that
+// slides through the whole shot while N is too small to follow it) is smooth in
+// space. Counted into s² it would look like noise the projection averages away,
+// while in fact it stays in x̂ whole; the high-pass sees only white noise, so the
+// missed lighting shows up in b_t where it is. It reads one row beyond the window:
+// a band needs radius + 1 halo rows to give the same sigma as the whole image.
+// Why the mean and not the mean square for b_t: content the modes miss (an object
+// seen in a few frames) is coherent over the window, so it survives the mean,
+// while noise and single-pixel fireflies (large residuals that barely move x̂)
+// mostly cancel. z = 1 subtracts the expected noise part exactly.
 #pragma once
 
 #include "core/lowrank/band.h"
@@ -38,8 +44,9 @@ struct ImageBandShape {
 struct ConfidenceOptions {
     /// Window radius in pixels (2 → 5×5), clipped at the band edges.
     int radius = 2;
-    /// z of the bias term (see the file comment); 0 gives the plain formula.
-    double bias_significance = 3.0;
+    /// z of the bias term (see the file comment): multiples of the noise variance of
+    /// the windowed mean subtracted from μ_t²; 1 is unbiased.
+    double bias_significance = 1.0;
 };
 
 /// Writes sigma for rows [valid_y0, valid_y1) of the band: `sigma` has

@@ -219,8 +219,9 @@ TEST_CASE("sigma of a band with halo rows equals the whole-image sigma, for 1 an
     const Rebuild result = rebuild(noisy);
     const FrameMatrix whole = sigma_of(noisy, result, ConfidenceOptions{});
 
-    // Band of image rows [14, 40) with 2 halo rows each side: valid rows [2, 24) of the band.
-    const int first_row = 14, band_height = 26, radius = 2;
+    // Band of image rows [14, 40) with radius + 1 = 3 halo rows each side (the
+    // high-pass reads one row beyond the window): valid rows [3, 23) of the band.
+    const int first_row = 14, band_height = 26, radius = 3;
     const std::int64_t row_length = kWidth * kChannels;
     const std::int64_t offset = first_row * row_length;
     const BandView noisy_band{noisy.data.data() + offset, band_height * row_length, kFrames, noisy.rows};
