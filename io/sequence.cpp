@@ -106,9 +106,9 @@ FrameSequence find_input_sequence(const std::string& pattern, const std::string&
     FrameSequence found = scan_input_sequence(pattern);
     std::vector<int> gaps = missing_frames(found.frames);
     if (!gaps.empty())
-        throw bad_input(pattern, fmt::format("frames {} are missing between {} and {} (use --frames to choose the "
+        throw bad_input(pattern, fmt::format("missing frames between {} and {}: {} (use --frames to choose the "
                                              "frames wanted)",
-                                             describe_frames(gaps), found.frames.front(), found.frames.back()));
+                                             found.frames.front(), found.frames.back(), describe_frames(gaps)));
     return found;
 }
 
@@ -123,7 +123,13 @@ FrameSequence scan_input_sequence(const std::string& pattern)
         throw bad_input(directory, "directory does not exist");
     std::vector<int> frames;
     std::vector<std::string> files;
-    fs::scan_for_matching_filenames(sequence.printf_pattern, frames, files);
+    // OIIO scans nothing for a pattern without a directory: scan "./" and strip it.
+    bool bare = directory.empty();
+    fs::scan_for_matching_filenames(bare ? "./" + sequence.printf_pattern : sequence.printf_pattern, frames, files);
+    if (bare)
+        for (std::string& file : files)
+            if (file.rfind("./", 0) == 0)
+                file.erase(0, 2);
     // Keep only names written exactly as the pattern writes them (padding matters).
     std::vector<std::pair<int, std::string>> found;
     for (size_t i = 0; i < frames.size(); ++i)

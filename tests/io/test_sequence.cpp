@@ -5,6 +5,8 @@
 
 #include <doctest/doctest.h>
 
+#include <filesystem>
+
 using namespace modestack;
 using modestack::testkit::TempDir;
 
@@ -109,4 +111,16 @@ TEST_CASE("output sequences name one file per frame with the pattern's padding")
     io::FrameSequence out = io::output_sequence("out/den.####.exr", {1, 2, 10});
     CHECK(out.files == std::vector<std::string>{"out/den.0001.exr", "out/den.0002.exr", "out/den.0010.exr"});
     CHECK_THROWS_AS(io::output_sequence("out/den.exr", {1, 2}), Error);
+}
+
+TEST_CASE("input sequences: a pattern without a directory is found in the current directory")
+{
+    TempDir dir;
+    touch_frames(dir, {7, 8, 9});
+    std::string previous = std::filesystem::current_path().string();
+    std::filesystem::current_path(dir.path());
+    io::FrameSequence found = io::find_input_sequence("shot.####.exr");
+    std::filesystem::current_path(previous);
+    CHECK(found.frames == std::vector<int>{7, 8, 9});
+    CHECK(found.files.front() == "shot.0007.exr");
 }
