@@ -15,6 +15,7 @@ namespace modestack::app {
 struct Subcommand {
     CLI::App* cli = nullptr;      ///< its CLI11 sub-app (for "was it chosen?")
     std::function<int()> run;     ///< runs it; returns the exit code
+    int usage_exit_code = 2;      ///< exit code for a command-line error in it (compare: 5)
 };
 
 /// The whole command line as typed, for provenance attributes and JSON.
@@ -25,5 +26,6 @@ void set_command_line(int argc, char** argv);
 Subcommand add_info_command(CLI::App& parent);
 Subcommand add_denoise_command(CLI::App& parent);
 Subcommand add_render_command(CLI::App& parent);
+Subcommand add_compare_command(CLI::App& parent);
 
 }  // namespace modestack::app

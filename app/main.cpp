@@ -66,6 +66,7 @@ int main(int argc, char** argv)
     subcommands.push_back(app::add_info_command(cli));
     subcommands.push_back(app::add_render_command(cli));
     subcommands.push_back(app::add_denoise_command(cli));
+    subcommands.push_back(app::add_compare_command(cli));
 
     try {
         cli.parse(argc, argv);
@@ -76,7 +77,11 @@ int main(int argc, char** argv)
     } catch (const CLI::CallForVersion& version) {
         return cli.exit(version);
     } catch (const CLI::ParseError& error) {
-        return report(std::string(error.what()) + " (run 'modestack --help')", exit_code(ErrorKind::Usage));
+        int code = exit_code(ErrorKind::Usage);
+        for (const auto& subcommand : subcommands)
+            if (subcommand.cli->parsed())
+                code = subcommand.usage_exit_code;
+        return report(std::string(error.what()) + " (run 'modestack --help')", code);
     }
 
     try {

@@ -5,5 +5,6 @@ target_sources(modestack PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/cmd_info.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_denoise.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_render.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cmd_compare.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sequence_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/option_values.cpp)
