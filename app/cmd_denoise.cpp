@@ -36,6 +36,10 @@ struct DenoiseOptions {
     bool no_firefly_clamp = false;
     double firefly_k = 6.0;
     int sigma_radius = 2;
+    bool mode_filter = false;
+    bool no_mode_filter = false;
+    int mode_filter_modes = 16;
+    std::vector<double> mode_filter_widths{0.75, 1.0, 1.5, 2.0, 3.0};
     bool skip_existing = false;
     CommonOptions common;
 };
@@ -62,6 +66,16 @@ denoise::Settings make_settings(const DenoiseOptions& options)
     settings.outliers.fireflies = !options.no_firefly_clamp;
     settings.outliers.firefly_k = options.firefly_k;
     settings.sigma_radius = options.sigma_radius;
+    if (options.mode_filter && options.no_mode_filter)
+        throw usage_error("--mode-filter and --no-mode-filter contradict each other: give one");
+    // On by default: it won on both shots of the quality benchmark (man page, DENOISE).
+    settings.mode_filter.enabled = !options.no_mode_filter;
+    if (settings.mode_filter.enabled && options.rank == "auto" && options.rank_rule != "press")
+        throw usage_error(fmt::format("--rank-rule {} needs --no-mode-filter: with the mode filter, --rank auto is "
+                                      "chosen by its SURE survey",
+                                      options.rank_rule));
+    settings.mode_filter.max_modes = options.mode_filter_modes;
+    settings.mode_filter.widths = options.mode_filter_widths;
     settings.max_memory_bytes = parse_memory_size(options.max_memory, "--max-memory");
     return settings;
 }
@@ -71,6 +85,36 @@ std::int64_t peak_resident_bytes()
     rusage usage{};
     getrusage(RUSAGE_SELF, &usage);
     return static_cast<std::int64_t>(usage.ru_maxrss) * 1024;
+}
+
+// Per surveyed mode: the filter SURE chose, its risk, the signal it estimates and
+// whether the mode is kept; null when the filter is off.
+nlohmann::ordered_json mode_filter_json(const denoise::Report& report)
+{
+    const denoise::ModeFilterPlan& plan = report.mode_filter;
+    if (plan.modes.empty())
+        return nullptr;
+    nlohmann::ordered_json modes = nlohmann::ordered_json::array();
+    for (size_t j = 0; j < plan.modes.size(); ++j) {
+        const denoise::ModeFilterChoice& choice = plan.modes[j];
+        modes.push_back({{"mode", j + 1},
+                         {"width", choice.width},
+                         {"guided", choice.range > 0},
+                         {"range", choice.range},
+                         {"sure", choice.sure},
+                         {"sure_unfiltered", choice.unfiltered_sure},
+                         {"signal", choice.signal},
+                         {"noise_scale", choice.noise_scale},
+                         {"kept", choice.kept}});
+    }
+    return {{"enabled", true},
+            {"rank", plan.rank},
+            {"guide", "first spatial mode"},
+            {"guide_smoothing", plan.guide_smoothing},
+            {"survey_stride", plan.survey_stride},
+            {"reasoning", plan.reasoning},
+            {"seconds_survey", report.seconds_filter_survey},
+            {"modes", modes}};
 }
 
 nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::SequenceReader& reader,
@@ -105,6 +149,7 @@ nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::Seq
     json["explained_variance"] = report.explained;
     json["temporal_modes"] = report.temporal_modes;
     json["outliers"] = {{"non_finite", report.outliers.non_finite}, {"fireflies", report.outliers.fireflies}};
+    json["mode_filter"] = mode_filter_json(report);
     json["seconds"] = {{"statistics", report.seconds_statistics},
                        {"solve", report.seconds_solve},
                        {"rebuild", report.seconds_rebuild},
@@ -207,8 +252,8 @@ Subcommand add_denoise_command(CLI::App& parent)
                         "Default: the only RGB layer");
     command->add_option("--rank", options->rank, "Number of modes N, or auto to let --rank-rule choose");
     command->add_option("--rank-rule", options->rank_rule,
-                        "How auto chooses N: press (cross-validation), variance (the seed's rule), noise-floor "
-                        "(Gavish-Donoho)");
+                        "How auto chooses N with --no-mode-filter: press (cross-validation), variance (the seed's "
+                        "rule), noise-floor (Gavish-Donoho)");
     command->add_option("--method", options->method, "Solver: auto, gram (exact F x F eigenproblem) or rsvd "
                                                       "(randomized SVD)");
     command->add_option("--max-memory", options->max_memory,
@@ -225,6 +270,19 @@ Subcommand add_denoise_command(CLI::App& parent)
         ->check(CLI::PositiveNumber);
     command->add_option("--sigma-radius", options->sigma_radius, "Spatial pooling radius of sigma, in pixels")
         ->check(CLI::NonNegativeNumber);
+    command->add_flag("--mode-filter", options->mode_filter,
+                      "Filter the spatial modes in space before the rebuild (the default): per mode, the width (and "
+                      "edge-aware guided filter from the first mode) with the lowest SURE risk; with --rank auto, N "
+                      "is the number of filtered modes that lowers the estimated error most");
+    command->add_flag("--no-mode-filter", options->no_mode_filter,
+                      "Rebuild from the unfiltered modes; --rank auto then uses --rank-rule");
+    command->add_option("--mode-filter-modes", options->mode_filter_modes,
+                        "Modes the mode filter surveys (at most F - 2)")
+        ->check(CLI::PositiveNumber);
+    command->add_option("--mode-filter-widths", options->mode_filter_widths,
+                        "Gaussian widths (pixels) the mode filter tries, comma-separated; no filter is always tried")
+        ->delimiter(',')
+        ->check(CLI::Range(0.1, 16.0));
     command->add_flag("--skip-existing", options->skip_existing,
                       "Do not rewrite output frames that exist already (farm re-runs)");
     add_common_options(*command, options->common);

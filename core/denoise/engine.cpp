@@ -44,8 +44,16 @@ public:
         int largest_rank = m_settings.rank.rule == lowrank::RankRule::Fixed ? m_settings.rank.fixed_rank
                                                                             : std::min(m_shape.frames - 1, 32);
         m_report.shape = m_shape;
-        // Sigma's window reads radius + 1 rows around a pixel (see confidence.h).
-        m_report.plan = plan_bands(m_shape, m_settings.max_memory_bytes, m_settings.sigma_radius + 1, largest_rank);
+        // Sigma's window reads radius + 1 rows around a pixel (see confidence.h); the
+        // mode filter reads its kernel and guide around a pixel.
+        int halo_rows = m_settings.sigma_radius + 1, plan_modes = largest_rank;
+        if (m_settings.mode_filter.enabled) {
+            halo_rows = std::max(halo_rows, mode_filter_halo(m_settings.mode_filter));
+            // Surveyed and filtered coefficients, the per-sample kept noise (F) and
+            // the guide with its noise (a few images).
+            plan_modes += std::max(m_settings.mode_filter.max_modes, largest_rank) + m_shape.frames + 6;
+        }
+        m_report.plan = plan_bands(m_shape, m_settings.max_memory_bytes, halo_rows, plan_modes);
         Solver solver = m_settings.solver;
         if (solver == Solver::Auto)
             solver = m_shape.frames >= m_settings.randomized_from_frames ? Solver::RandomizedSvd : Solver::Gram;
@@ -57,9 +65,16 @@ public:
 
         start = Clock::now();
         m_report.rank = lowrank::choose_rank(basis, m_settings.rank);
+        double survey_seconds = 0;
+        if (m_settings.mode_filter.enabled) {
+            auto survey_start = Clock::now();
+            survey_mode_filter(basis);
+            survey_seconds = seconds_since(survey_start);
+            m_report.seconds_filter_survey = survey_seconds;
+        }
         int rank = m_report.rank.rank;
         describe_basis(basis, rank);
-        m_report.seconds_solve = seconds_since(start) + m_solve_seconds;
+        m_report.seconds_solve = seconds_since(start) - survey_seconds + m_solve_seconds;
         m_report.seconds_statistics -= m_solve_seconds;
 
         start = Clock::now();
@@ -175,6 +190,95 @@ private:
         }
     }
 
+    // Pass 2 reads (or, for a kept shot, points at) rows [row, end) of every frame
+    // with the plan's halo rows around them.
+    Band& band_with_halo(Band& band, int row, int end)
+    {
+        if (m_report.plan.in_memory)
+            return m_whole;
+        int halo = m_report.plan.halo_rows;
+        read_band(band, std::max(0, row - halo), std::min(m_shape.height, end + halo), nullptr);
+        return band;
+    }
+
+    // Modes the mode filter surveys (and the K of its noise estimate): at most F − 2
+    // so that the noise estimate has two degrees of freedom, at least a fixed N.
+    int filter_survey_modes(const lowrank::Basis& basis) const
+    {
+        int modes = std::min({m_settings.mode_filter.max_modes, m_shape.frames - 2, basis.modes()});
+        if (m_settings.rank.rule == lowrank::RankRule::Fixed)
+            modes = std::max(modes, m_settings.rank.fixed_rank);
+        return std::max(1, modes);
+    }
+
+    // The mode filter's SURE pass: a filter per mode and, for auto rank, N.
+    void survey_mode_filter(const lowrank::Basis& basis)
+    {
+        const BandPlan& plan = m_report.plan;
+        m_filter_modes = filter_survey_modes(basis);
+        Eigen::MatrixXd temporal = basis.temporal.leftCols(m_filter_modes);
+        SureSurvey survey(m_settings.mode_filter, m_shape.width, m_shape.height, m_shape.channels, m_filter_modes);
+        if (!plan.in_memory)
+            ++m_report.passes;
+        m_progress.begin("mode filter: choosing widths", m_shape.height);
+        Band band;
+        std::vector<float> coefficients, noise_variance;
+        for (int row = 0; row < m_shape.height; row += plan.band_rows) {
+            int end = std::min(m_shape.height, row + plan.band_rows);
+            Band& data = band_with_halo(band, row, end);
+            lowrank::BandView noisy{data.values.data(), data.rows, m_shape.frames, data.rows};
+            coefficients.resize(static_cast<size_t>(data.rows) * m_filter_modes);
+            lowrank::MutableBandView coefficient_view{coefficients.data(), data.rows, m_filter_modes, data.rows};
+            lowrank::project_coefficients(noisy, temporal, coefficient_view);
+            lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
+            coefficient_noise_variance(noisy, coefficient_view.view(), shape, m_settings.mode_filter.noise_radius,
+                                       noise_variance);
+            survey.add_band(coefficient_view.view(), noise_variance, shape, data.row_begin, row - data.row_begin,
+                            end - data.row_begin);
+            m_progress.advance(end - row);
+        }
+        m_progress.end();
+        bool fixed = m_settings.rank.rule == lowrank::RankRule::Fixed;
+        m_report.mode_filter = survey.finish(fixed ? m_settings.rank.fixed_rank : 0);
+        if (!fixed) {
+            m_report.rank.rank = m_report.mode_filter.rank;
+            m_report.rank.rule = "sure";
+            m_report.rank.reasoning = m_report.mode_filter.reasoning;
+        }
+    }
+
+    // The mode filter's part of pass 2 for rows [row, end) of `data`: filters the
+    // first `rank` coefficient images in place (valid rows only) and writes the noise
+    // each rebuilt sample keeps, h_t(p) = Σ_j V_tj² · gain_j(p), for sigma.
+    void filter_band(std::vector<float>& coefficients, const Band& data, const Eigen::MatrixXd& temporal, int rank,
+                     int row, int end, std::vector<float>& kept_noise)
+    {
+        const int frames = m_shape.frames;
+        const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
+        const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
+        lowrank::BandView noisy{data.values.data(), data.rows, frames, data.rows};
+        lowrank::BandView surveyed{coefficients.data(), data.rows, m_filter_modes, data.rows};
+        lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
+        std::vector<float> noise_variance, filtered(static_cast<size_t>(valid) * rank), gains;
+        coefficient_noise_variance(noisy, surveyed, shape, m_settings.mode_filter.noise_radius, noise_variance);
+        filter_coefficients(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin,
+                            m_report.mode_filter, rank, {filtered.data(), valid, rank, valid}, gains);
+        for (int j = 0; j < rank; ++j)
+            std::copy(filtered.begin() + j * valid, filtered.begin() + (j + 1) * valid,
+                      coefficients.begin() + j * data.rows + offset);
+        kept_noise.resize(static_cast<size_t>(valid) * frames);
+        const std::int64_t valid_pixels = valid / m_shape.channels;
+        tbb::parallel_for(0, frames, [&](int t) {
+            for (std::int64_t i = 0; i < valid; ++i) {
+                const std::int64_t pixel = i / m_shape.channels;
+                double kept = 0;
+                for (int j = 0; j < rank; ++j)
+                    kept += temporal(t, j) * temporal(t, j) * gains[static_cast<size_t>(j * valid_pixels + pixel)];
+                kept_noise[static_cast<size_t>(t * valid + i)] = static_cast<float>(kept);
+            }
+        });
+    }
+
     void rebuild(const lowrank::Basis& basis, int rank)
     {
         const BandPlan& plan = m_report.plan;
@@ -190,30 +294,42 @@ private:
             ++m_report.passes;
         m_sink.begin({rank, m_report.rank.rule, m_report.solver});
         m_progress.begin("rebuilding frames", m_shape.height);
-        Band band, coefficients_band;
-        std::vector<float> rebuilt, sigma;
+        const bool filter = m_settings.mode_filter.enabled;
+        // With the mode filter, pass 2 also projects on the surveyed modes: its noise
+        // estimate needs the energy they leave.
+        const int projected = filter ? std::max(rank, m_filter_modes) : rank;
+        Eigen::MatrixXd temporal_projected = basis.temporal.leftCols(projected);
+        Band band;
+        std::vector<float> rebuilt, sigma, kept_noise;
         for (int row = 0; row < m_shape.height; row += plan.band_rows) {
             int end = std::min(m_shape.height, row + plan.band_rows);
-            int read_begin = std::max(0, row - plan.halo_rows), read_end = std::min(m_shape.height, end + plan.halo_rows);
-            Band& data = kept ? m_whole : band;
-            if (!kept)
-                read_band(band, read_begin, read_end, nullptr);
+            Band& data = band_with_halo(band, row, end);
             throw_if_cancelled();
             lowrank::BandView noisy{data.values.data(), data.rows, frames, data.rows};
 
-            std::vector<float> coefficients(static_cast<size_t>(data.rows) * rank);
-            lowrank::MutableBandView coefficient_view{coefficients.data(), data.rows, rank, data.rows};
-            lowrank::project_coefficients(noisy, temporal, coefficient_view);
+            std::vector<float> coefficients(static_cast<size_t>(data.rows) * projected);
+            lowrank::MutableBandView coefficient_view{coefficients.data(), data.rows, projected, data.rows};
+            lowrank::project_coefficients(noisy, temporal_projected, coefficient_view);
             rebuilt.resize(data.values.size());
             lowrank::MutableBandView rebuilt_view{rebuilt.data(), data.rows, frames, data.rows};
-            lowrank::rebuild_from_coefficients(coefficient_view.view(), temporal, rebuilt_view);
+            // The unfiltered rebuild of the whole band: sigma reads its residual.
+            lowrank::rebuild_from_coefficients({coefficients.data(), data.rows, rank, data.rows}, temporal,
+                                               rebuilt_view);
             // Sigma only for the band's own rows, laid out like the rebuilt band.
             std::int64_t offset = (row - data.row_begin) * row_samples;
             sigma.assign(data.values.size(), 0.0f);
             lowrank::MutableBandView sigma_view{sigma.data() + offset, (end - row) * row_samples, frames, data.rows};
             lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
+            lowrank::BandView kept_noise_view{};
+            if (filter) {
+                filter_band(coefficients, data, temporal, rank, row, end, kept_noise);
+                kept_noise_view = {kept_noise.data(), sigma_view.rows, frames, sigma_view.rows};
+            }
             lowrank::confidence_band(noisy, rebuilt_view.view(), shape, leverages, rank, row - data.row_begin,
-                                     end - data.row_begin, confidence, sigma_view);
+                                     end - data.row_begin, confidence, sigma_view, filter ? &kept_noise_view : nullptr);
+            if (filter)  // the band's own rows from the filtered coefficients
+                lowrank::rebuild_from_coefficients({coefficients.data() + offset, sigma_view.rows, rank, data.rows},
+                                                   temporal, {rebuilt.data() + offset, sigma_view.rows, frames, data.rows});
 
             tbb::parallel_for(0, frames, [&](int frame) {
                 m_sink.write_rows(frame, row, end, rebuilt.data() + frame * data.rows + offset,
@@ -248,6 +364,7 @@ private:
     Report m_report;
     Band m_whole;  // the kept shot, when it fits in memory
     double m_solve_seconds = 0;
+    int m_filter_modes = 0;  // modes the mode filter surveyed
 };
 
 }  // namespace

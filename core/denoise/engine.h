@@ -3,7 +3,10 @@
 // accumulates the Gram matrix XᵀX; the small eigenproblem (or the randomized SVD)
 // gives the temporal modes; a rank rule picks N; pass 2 reads the bands again
 // (with halo rows), rebuilds every frame from the first N modes and estimates the
-// standard error of each rebuilt value. When the shot fits the memory budget it
+// standard error of each rebuilt value. With the mode filter (mode_filter.h) a
+// survey pass between them chooses each mode's spatial filter by SURE (and N for
+// auto rank), and pass 2 filters the coefficient images before the rebuild and
+// tells sigma how much noise each filtered sample keeps. When the shot fits the memory budget it
 // is read once and kept. Results are bit-identical for any thread count and for
 // streaming versus in-memory runs.
 #pragma once
@@ -11,6 +14,7 @@
 #include "core/common/progress.h"
 #include "core/denoise/band_plan.h"
 #include "core/denoise/frame_stream.h"
+#include "core/denoise/mode_filter.h"
 #include "core/lowrank/outliers.h"
 #include "core/lowrank/randomized_svd.h"
 #include "core/lowrank/rank_rule.h"
@@ -41,6 +45,9 @@ struct Settings {
     lowrank::RandomizedSvdOptions randomized;
     /// Auto picks the randomized SVD from this many frames on (measured in bench/).
     int randomized_from_frames = 400;
+    /// Spatial filtering of the modes; when enabled, `auto` rank is chosen by its SURE
+    /// survey instead of rank.rule (see mode_filter.h).
+    ModeFilterOptions mode_filter;
 };
 
 /// What a run did and found, for the JSON summary and the report.
@@ -54,6 +61,8 @@ struct Report {
     std::vector<double> explained;        ///< σ_j² / total energy, per mode
     std::vector<std::vector<double>> temporal_modes;  ///< pt(t, j) for j < N: [j][t]
     lowrank::OutlierCounts outliers;
+    ModeFilterPlan mode_filter;     ///< per-mode filters and SURE (empty when off)
+    double seconds_filter_survey = 0;  ///< the mode filter's SURE pass
     double seconds_statistics = 0;  ///< pass 1 (read + clean + Gram)
     double seconds_solve = 0;       ///< eigensolve or randomized SVD, and the rank rule
     double seconds_rebuild = 0;     ///< pass 2 (read + rebuild + sigma + write)

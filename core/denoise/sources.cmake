@@ -1,3 +1,4 @@
 target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/band_plan.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/engine.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/engine.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/mode_filter.cpp)

@@ -83,7 +83,7 @@ void windowed_mean(const Sample& sample, const ImageBandShape& shape, int radius
 
 void confidence_band(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
                      const Eigen::VectorXd& leverages, int rank, int valid_y0, int valid_y1,
-                     const ConfidenceOptions& options, MutableBandView sigma)
+                     const ConfidenceOptions& options, MutableBandView sigma, const BandView* kept_noise)
 {
     const int frames = noisy.frames;
     const std::int64_t band_rows = static_cast<std::int64_t>(shape.width) * shape.height * shape.channels;
@@ -98,6 +98,8 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
         throw internal_error("confidence_band: rank must be less than the number of frames");
     if (options.radius < 0)
         throw internal_error("confidence_band: negative window radius");
+    if (kept_noise && (kept_noise->rows != sigma.rows || kept_noise->frames != frames))
+        throw internal_error("confidence_band: kept noise does not match sigma");
     if (sigma.rows == 0)
         return;
 
@@ -137,7 +139,8 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
                 const double mean = sigma.at(i, t);
                 const double bias =
                     std::max(0.0, mean * mean - options.bias_significance * noise_variance * (1.0 - leverages(t)) / window_size);
-                sigma.at(i, t) = static_cast<float>(std::sqrt(noise_variance * leverages(t) + bias));
+                const double kept = kept_noise ? kept_noise->at(i, t) : leverages(t);
+                sigma.at(i, t) = static_cast<float>(std::sqrt(noise_variance * kept + bias));
             }
         }
     });

@@ -53,9 +53,13 @@ struct ConfidenceOptions {
 /// width·(valid_y1 − valid_y0)·channels rows and F frames, same interleaving. `noisy`
 /// and `rebuilt` hold the whole band (with its halo rows) in `shape`; `leverages` is h
 /// (length F) for `rank` modes, rank < F. Throws modestack::Error (internal) on
-/// mismatched shapes.
+/// mismatched shapes. `kept_noise` (optional, valid rows × F like `sigma`) replaces
+/// h_t in the noise term s²·h_t per sample: a spatial filter of the modes
+/// (core/denoise/mode_filter.h) keeps less than h_t of the noise, a different amount
+/// at each pixel. The residual (and so s² and the bias) still comes from `rebuilt`.
 void confidence_band(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
                      const Eigen::VectorXd& leverages, int rank, int valid_y0, int valid_y1,
-                     const ConfidenceOptions& options, MutableBandView sigma);
+                     const ConfidenceOptions& options, MutableBandView sigma,
+                     const BandView* kept_noise = nullptr);
 
 } // namespace modestack::lowrank

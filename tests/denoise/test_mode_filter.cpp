@@ -1,0 +1,271 @@
+// The mode filter (core/denoise/mode_filter.h): SURE picks no filter on noise-free
+// data and a real width on noisy smooth data, and its estimate matches the true
+// error; the guided filter keeps a step edge sharper than a plain Gaussian; with
+// filtering the engine keeps a weak but real mode that press drops, and lowers the
+// error; sigma stays calibrated; streamed, kept, 1- and 2-thread runs give the same bits.
+#include "core/denoise/engine.h"
+#include "core/denoise/mode_filter.h"
+
+#include <doctest/doctest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+using namespace modestack;
+using namespace modestack::denoise;
+
+namespace {
+
+struct MemoryShot : FrameSource {
+    ShotShape size;
+    std::vector<std::vector<float>> frames;
+    ShotShape shape() const override { return size; }
+    void read_rows(int frame, int row_begin, int row_end, float* destination) override
+    {
+        std::size_t row = static_cast<std::size_t>(size.width) * size.channels;
+        std::copy(frames[frame].begin() + row_begin * row, frames[frame].begin() + row_end * row, destination);
+    }
+};
+
+struct MemorySink : FrameSink {
+    std::vector<std::vector<float>> rebuilt, sigma;
+    std::size_t row_length;
+    explicit MemorySink(const ShotShape& shape)
+        : rebuilt(shape.frames, std::vector<float>(std::size_t(shape.width) * shape.height * shape.channels)),
+          sigma(rebuilt), row_length(std::size_t(shape.width) * shape.channels)
+    {
+    }
+    void write_rows(int frame, int row_begin, int row_end, const float* values, const float* errors) override
+    {
+        std::copy(values, values + (row_end - row_begin) * row_length, rebuilt[frame].begin() + row_begin * row_length);
+        std::copy(errors, errors + (row_end - row_begin) * row_length, sigma[frame].begin() + row_begin * row_length);
+    }
+};
+
+// Coefficient images of `modes` modes, one channel, [mode][y][x], with their noise.
+struct Images {
+    int width, height, modes;
+    std::vector<float> clean, noisy, variance;
+    lowrank::ImageBandShape shape() const { return {width, height, 1}; }
+    lowrank::BandView view() const { return {noisy.data(), std::int64_t(width) * height, modes, std::int64_t(width) * height}; }
+};
+
+template <typename Pattern> Images make_images(int width, int height, int modes, double noise, Pattern pattern)
+{
+    Images images{width, height, modes, {}, {}, {}};
+    std::mt19937 generator(7);
+    std::normal_distribution<double> normal(0.0, 1.0);
+    for (int j = 0; j < modes; ++j)
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                double value = pattern(j, x, y);
+                images.clean.push_back(static_cast<float>(value));
+                images.noisy.push_back(static_cast<float>(value + noise * normal(generator)));
+            }
+    images.variance.assign(std::size_t(width) * height, static_cast<float>(noise * noise));
+    return images;
+}
+
+// Filters all rows of `images` with `plan` and returns ‖A c − s‖² of mode j.
+double true_error(const Images& images, const ModeFilterPlan& plan, int j)
+{
+    std::int64_t rows = std::int64_t(images.width) * images.height;
+    std::vector<float> filtered(static_cast<std::size_t>(rows) * images.modes), gains;
+    filter_coefficients(images.view(), images.variance, images.shape(), 0, images.height, plan, images.modes,
+                        {filtered.data(), rows, images.modes, rows}, gains);
+    double error = 0;
+    for (std::int64_t i = j * rows; i < (j + 1) * rows; ++i)
+        error += (double(filtered[i]) - images.clean[i]) * (double(filtered[i]) - images.clean[i]);
+    return error;
+}
+
+ModeFilterPlan survey(const Images& images, const ModeFilterOptions& options, int fixed_rank = 0)
+{
+    SureSurvey survey(options, images.width, images.height, 1, images.modes);
+    survey.add_band(images.view(), images.variance, images.shape(), 0, 0, images.height);
+    return survey.finish(fixed_rank);
+}
+
+// A shot of `frames` frames: a bright mode with an edge, a weak smooth mode with
+// `weak` amplitude per frame, and Gaussian noise.
+MemoryShot two_mode_shot(int width, int height, int frames, double weak, double noise, unsigned seed)
+{
+    MemoryShot shot;
+    shot.size = {frames, width, height, 3};
+    std::mt19937 generator(seed);
+    std::normal_distribution<double> normal(0.0, noise);
+    for (int t = 0; t < frames; ++t) {
+        double phase = 6.283185307 * t / frames;
+        std::vector<float> frame;
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    double base = (x < width / 3 ? 1.0 : 2.0) + 0.2 * c;
+                    double smooth = std::sin(6.283185307 * x / width) * std::cos(3.14159 * y / height);
+                    double value = base + weak * smooth * std::sin(phase) * 1.41421356;
+                    frame.push_back(static_cast<float>(value + (noise > 0 ? normal(generator) : 0.0)));
+                }
+        shot.frames.push_back(frame);
+    }
+    return shot;
+}
+
+double mean_square(const std::vector<std::vector<float>>& a, const std::vector<std::vector<float>>& b)
+{
+    double sum = 0;
+    std::size_t count = 0;
+    for (std::size_t t = 0; t < a.size(); ++t)
+        for (std::size_t i = 0; i < a[t].size(); ++i, ++count)
+            sum += (double(a[t][i]) - b[t][i]) * (double(a[t][i]) - b[t][i]);
+    return sum / count;
+}
+
+}  // namespace
+
+TEST_CASE("mode filter: SURE keeps every mode unfiltered when there is no noise")
+{
+    // Textured patterns: any blur changes them, so with v = 0 the identity wins.
+    Images images = make_images(40, 30, 3, 0.0, [](int j, int x, int y) {
+        return std::sin(0.9 * x + j) * std::cos(0.7 * y) + ((x * 7 + y * 3 + j) % 5) * 0.1;
+    });
+    ModeFilterPlan plan = survey(images, ModeFilterOptions{});
+    REQUIRE(plan.modes.size() == 3);
+    for (const ModeFilterChoice& choice : plan.modes) {
+        CHECK(choice.width == 0);
+        CHECK(choice.sure == 0);
+        CHECK(choice.signal > 0);
+        CHECK(choice.kept);
+    }
+    CHECK(plan.rank == 3);
+}
+
+TEST_CASE("mode filter: on noisy smooth modes SURE picks a width and estimates the true error")
+{
+    const double noise = 0.5;
+    Images images = make_images(96, 80, 3, noise, [](int j, int x, int y) {
+        return (3.0 - j) * (1.0 + 0.5 * std::sin(0.08 * x + j) * std::cos(0.06 * y));
+    });
+    ModeFilterPlan plan = survey(images, ModeFilterOptions{});
+    const double pixels = 96.0 * 80.0;
+    for (int j = 0; j < 3; ++j) {
+        CAPTURE(j);
+        const ModeFilterChoice& choice = plan.modes[j];
+        CHECK(choice.width >= 1.5);
+        // The noise scale (high-pass energy over Σ v) finds v itself on smooth modes.
+        CHECK(choice.noise_scale == doctest::Approx(1.0).epsilon(0.05));
+        CHECK(choice.unfiltered_sure == doctest::Approx(pixels * noise * noise).epsilon(0.05));
+        // The filter removes most of the noise: error well below Σ v.
+        double error = true_error(images, plan, j);
+        CHECK(error < 0.1 * pixels * noise * noise);
+        // SURE is unbiased; its own spread is about √(2·pixels)·v (the noise of
+        // ‖A c − c‖²), so it must lie within three of those of the true error.
+        CHECK(std::abs(choice.sure - error) < 3 * std::sqrt(2 * pixels) * noise * noise);
+        CHECK(choice.kept);
+    }
+}
+
+TEST_CASE("mode filter: the guided filter keeps a step edge of the guide sharper than a plain Gaussian")
+{
+    const int width = 64, height = 48, edge = 32;
+    // Mode 1 (the guide) and mode 2 share a step at x = edge; mode 2 is weak and noisy.
+    Images images = make_images(width, height, 2, 0.3, [&](int j, int x, int) {
+        return (j == 0 ? 20.0 : 1.5) * (x < edge ? 1.0 : 2.0);
+    });
+    ModeFilterOptions options;
+    options.widths = {2.0};
+    options.range_scales = {2.0};
+    ModeFilterPlan plan = survey(images, options);
+    REQUIRE(plan.candidates.size() == 3);  // identity, Gaussian, guided
+    CHECK(plan.modes[0].range == 0);       // c_1 never guides itself
+    CHECK(plan.modes[1].width == 2.0);
+    CHECK(plan.modes[1].range == 2.0);     // SURE prefers the guided filter
+
+    auto edge_error = [&](int candidate) {
+        ModeFilterPlan forced = plan;
+        forced.modes[1].candidate = candidate;
+        std::int64_t rows = std::int64_t(width) * height;
+        std::vector<float> filtered(static_cast<std::size_t>(rows) * 2), gains;
+        filter_coefficients(images.view(), images.variance, images.shape(), 0, height, forced, 2,
+                            {filtered.data(), rows, 2, rows}, gains);
+        double error = 0;
+        for (int y = 0; y < height; ++y)
+            for (int x = edge - 3; x < edge + 3; ++x) {
+                std::int64_t i = rows + std::int64_t(y) * width + x;
+                error += (double(filtered[i]) - images.clean[i]) * (double(filtered[i]) - images.clean[i]);
+            }
+        return error;
+    };
+    double gaussian = edge_error(1), guided = edge_error(2);
+    CHECK(guided < 0.25 * gaussian);
+}
+
+TEST_CASE("mode filter: the engine keeps a weak smooth mode that press drops, and the error falls")
+{
+    const int frames = 24;
+    MemoryShot clean = two_mode_shot(64, 48, frames, 0.1, 0.0, 1);
+    MemoryShot noisy = two_mode_shot(64, 48, frames, 0.1, 0.5, 2);
+    Settings press;
+    press.outliers.fireflies = false;
+    MemorySink press_sink(noisy.size);
+    Report press_report = run_denoise(noisy, press_sink, press, Progress::silent());
+    CHECK(press_report.rank.rank == 1);
+
+    Settings filtered = press;
+    filtered.mode_filter.enabled = true;
+    // A wide sigma window makes the confidence's bias floor (the positive part of
+    // the windowed mean residual) small, so sigma² is mostly its noise term.
+    filtered.sigma_radius = 8;
+    MemorySink filtered_sink(noisy.size);
+    Report report = run_denoise(noisy, filtered_sink, filtered, Progress::silent());
+    CHECK(report.rank.rule == "sure");
+    CHECK(report.rank.rank == 2);  // the modes beyond are noise
+    REQUIRE(report.mode_filter.modes.size() == 16);  // max_modes
+    CHECK(report.mode_filter.modes[1].kept);
+    CHECK(report.mode_filter.modes[1].width >= 1.5);
+    double press_error = mean_square(press_sink.rebuilt, clean.frames);
+    double filtered_error = mean_square(filtered_sink.rebuilt, clean.frames);
+    CHECK(filtered_error < 0.5 * press_error);
+
+    // Sigma stays calibrated away from the edge: mean sigma² ≈ mean squared error.
+    double error = 0, variance = 0;
+    for (int t = 0; t < frames; ++t)
+        for (std::size_t i = 0; i < clean.frames[t].size(); ++i) {
+            int x = static_cast<int>(i / 3 % 64);
+            if (std::abs(x - 64 / 3) < 6)
+                continue;
+            double difference = double(filtered_sink.rebuilt[t][i]) - clean.frames[t][i];
+            error += difference * difference;
+            variance += double(filtered_sink.sigma[t][i]) * filtered_sink.sigma[t][i];
+        }
+    CHECK(variance / error == doctest::Approx(1.0).epsilon(0.35));
+}
+
+TEST_CASE("mode filter: streamed and kept shots, 1 and 2 threads give the same bits")
+{
+    MemoryShot shot = two_mode_shot(40, 70, 12, 0.3, 0.3, 5);
+    auto run = [&](std::int64_t memory, int threads) {
+        MemorySink sink(shot.size);
+        Settings settings;
+        settings.max_memory_bytes = memory;
+        settings.mode_filter.enabled = true;
+        Report report;
+        tbb::task_arena arena(threads);
+        arena.execute([&] { report = run_denoise(shot, sink, settings, Progress::silent()); });
+        return std::make_pair(report, sink);
+    };
+    auto [kept_report, kept] = run(std::int64_t(1) << 30, 2);
+    auto [streamed_report, streamed] = run(std::int64_t(2) << 20, 2);
+    auto [single_report, single] = run(std::int64_t(2) << 20, 1);
+    CHECK(kept_report.plan.in_memory);
+    CHECK_FALSE(streamed_report.plan.in_memory);
+    CHECK(streamed_report.plan.band_rows < 70);
+    CHECK(streamed_report.passes == 3);
+    CHECK(kept_report.rank.rank == streamed_report.rank.rank);
+    CHECK(kept_report.mode_filter.modes[1].sure == streamed_report.mode_filter.modes[1].sure);
+    CHECK(kept.rebuilt == streamed.rebuilt);
+    CHECK(kept.sigma == streamed.sigma);
+    CHECK(streamed.rebuilt == single.rebuilt);
+    CHECK(streamed.sigma == single.sigma);
+}
