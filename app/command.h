@@ -26,6 +26,8 @@ void set_command_line(int argc, char** argv);
 Subcommand add_info_command(CLI::App& parent);
 Subcommand add_denoise_command(CLI::App& parent);
 Subcommand add_render_command(CLI::App& parent);
+Subcommand add_refine_command(CLI::App& parent);
+Subcommand add_run_command(CLI::App& parent);
 Subcommand add_compare_command(CLI::App& parent);
 
 }  // namespace modestack::app

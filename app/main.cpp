@@ -65,6 +65,8 @@ int main(int argc, char** argv)
     std::vector<app::Subcommand> subcommands;
     subcommands.push_back(app::add_info_command(cli));
     subcommands.push_back(app::add_render_command(cli));
+    subcommands.push_back(app::add_refine_command(cli));
+    subcommands.push_back(app::add_run_command(cli));
     subcommands.push_back(app::add_denoise_command(cli));
     subcommands.push_back(app::add_compare_command(cli));
 

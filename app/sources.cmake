@@ -5,6 +5,8 @@ target_sources(modestack PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/cmd_info.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_denoise.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_render.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cmd_refine.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/cmd_run.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_compare.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sequence_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/option_values.cpp)

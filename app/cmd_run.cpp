@@ -1,0 +1,461 @@
+// `modestack run`: the main job end to end (issue 6, README command one).
+// Renders the noisy pass of a built-in scene, denoises its indirect layer (auto
+// rank), refines the unsure pixels at high spp, composites the final beauty
+// = DiffCol × (DiffDir + DiffInd) + Emit ([0017]) and writes a summary and a
+// contact sheet. Each stage is the very subcommand a user would type (run in
+// this process, not spawned), so `run` and the stages by hand give the same
+// files. With --reference-spp it also renders a reference and measures relMSE,
+// equivalent spp and the equal-quality speed-up as DESIGN.md defines them.
+#include "app/command.h"
+#include "app/run_context.h"
+#include "core/common/error.h"
+#include "core/refine/equal_quality.h"
+#include "core/scene/builtin_scenes.h"
+#include "io/contact_sheet.h"
+#include "io/frame_output.h"
+#include "io/sequence.h"
+#include "io/sequence_reader.h"
+#include "io/text_output.h"
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+namespace modestack::app {
+namespace {
+
+namespace stdfs = std::filesystem;
+using Json = nlohmann::ordered_json;
+
+struct RunOptions {
+    std::string scene = "orbit";
+    std::string directory = "out/run";
+    std::string size = "320x240";
+    std::string frames;
+    int spp = 4;
+    int refine_spp = 256;
+    double budget_percent = 2.0;
+    double threshold = -1; ///< > 0: use it instead of the budget
+    int reference_spp = 0;
+    double exposure = 0.0;
+    CommonOptions common;
+};
+
+// Runs one stage as its subcommand, with the common options passed on.
+void run_stage(std::vector<std::string> arguments, const CommonOptions& common)
+{
+    if (common.threads > 0)
+        arguments.insert(arguments.end(), {"--threads", std::to_string(common.threads)});
+    if (common.quiet)
+        arguments.push_back("--quiet");
+    CLI::App cli{"modestack", "modestack"};
+    cli.require_subcommand(1);
+    std::vector<Subcommand> stages{add_render_command(cli), add_denoise_command(cli),
+                                   add_refine_command(cli)};
+    std::vector<std::string> reversed(arguments.rbegin(), arguments.rend());
+    try {
+        cli.parse(reversed);
+    } catch (const CLI::ParseError& error) {
+        throw internal_error(
+            fmt::format("run built a bad '{}' command: {}", arguments.front(), error.what()));
+    }
+    for (auto& stage : stages)
+        if (stage.cli->parsed() && stage.run() != 0)
+            throw bad_input(arguments.front(), "stage failed");
+}
+
+Json read_json(const std::string& path)
+{
+    std::ifstream stream(path);
+    if (!stream)
+        throw bad_input(path, "cannot read a stage's JSON summary");
+    return Json::parse(stream);
+}
+
+std::vector<float> read_frame(const io::SequenceReader& reader, int frame_index)
+{
+    std::vector<float> values(static_cast<std::size_t>(reader.width()) * reader.height() *
+                              reader.selected_channel_count());
+    reader.read_selected(frame_index, 0, reader.height(), values.data());
+    return values;
+}
+
+// beauty = DiffCol × (DiffDir + DiffInd) + Emit from 12 interleaved channels per
+// pixel in that layer order; `indirect` overrides DiffInd when given (3 per pixel).
+std::vector<float> composite(const std::vector<float>& passes, const float* indirect)
+{
+    std::size_t pixels = passes.size() / 12;
+    std::vector<float> beauty(pixels * 3);
+    for (std::size_t p = 0; p < pixels; ++p)
+        for (int c = 0; c < 3; ++c) {
+            const float* pass = passes.data() + p * 12;
+            float diffuse_indirect = indirect ? indirect[p * 3 + c] : pass[6 + c];
+            beauty[p * 3 + c] = pass[c] * (pass[3 + c] + diffuse_indirect) + pass[9 + c];
+        }
+    return beauty;
+}
+
+const std::vector<std::string> kPassLayers{"DiffCol", "DiffDir", "DiffInd", "Emit"};
+
+// The final sequence: the refined frames with Combined.RGB recomposited.
+void write_final(const io::FrameSequence& refined, const io::FrameSequence& final_sequence,
+                 Progress& progress)
+{
+    io::SequenceReader beauty(refined, {"Combined"});
+    io::SequenceReader passes(refined, kPassLayers);
+    std::vector<io::HeaderAttribute> attributes{
+        io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
+        io::HeaderAttribute::of_text("modestack:command", command_line()),
+        io::HeaderAttribute::of_text("modestack:composite",
+                                     "Combined = DiffCol * (DiffDir + DiffInd) + Emit"),
+    };
+    std::vector<std::unique_ptr<io::FrameOutput>> outputs;
+    std::vector<unsigned char> native;
+    progress.begin("compositing the final beauty", beauty.frame_count());
+    for (int i = 0; i < beauty.frame_count(); ++i) {
+        std::vector<float> rgb = composite(read_frame(passes, i), nullptr);
+        beauty.read_native(i, 0, beauty.height(), native);
+        outputs.push_back(std::make_unique<io::FrameOutput>(final_sequence.files[i], beauty, i,
+                                                            std::vector<std::string>{}, attributes));
+        outputs.back()->write_replaced_rows(0, beauty.height(), native, rgb.data(), nullptr);
+        progress.advance();
+    }
+    for (auto& output : outputs)
+        output->commit();
+    progress.end();
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start)
+{
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+std::string sequence_path(const RunOptions& options, const std::string& kind)
+{
+    return (stdfs::path(options.directory) / kind / (options.scene + ".####.exr")).string();
+}
+
+// Frames shown on the contact sheet: four spread over the shot; for `switch` one
+// of them is the middle of the crossing, where the denoiser fails.
+std::vector<int> sheet_frame_indices(const std::vector<int>& frames, const std::string& scene)
+{
+    std::vector<int> indices;
+    int count = static_cast<int>(frames.size());
+    for (int k = 0; k < std::min(4, count); ++k)
+        indices.push_back(count == 1 ? 0 : k * (count - 1) / std::max(1, std::min(4, count) - 1));
+    if (scene == "switch") {
+        int middle = (scene::kSwitchCrossingFirstFrame + scene::kSwitchCrossingLastFrame) / 2;
+        auto found = std::find(frames.begin(), frames.end(), middle);
+        if (found != frames.end() && indices.size() > 1)
+            indices[1] = static_cast<int>(found - frames.begin());
+    }
+    std::sort(indices.begin(), indices.end());
+    indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
+    return indices;
+}
+
+int run_run(const RunOptions& options)
+{
+    auto start = std::chrono::steady_clock::now();
+    const scene::SceneInfo* info = nullptr;
+    for (const auto& candidate : scene::builtin_scenes())
+        if (candidate.name == options.scene)
+            info = &candidate;
+    if (!info)
+        scene::make_builtin_scene(options.scene, 1); // throws the error listing the scenes
+    std::vector<int> frames = io::parse_frame_range(
+        options.frames.empty() ? fmt::format("{}-{}", info->first_frame, info->last_frame) : options.frames);
+    if (frames.size() < 3)
+        throw usage_error("--frames: run denoises a shot, give at least 3 frames");
+    const std::string frame_range = io::describe_frames(frames);
+    const stdfs::path directory(options.directory);
+    const stdfs::path json_directory = directory / "json";
+    stdfs::create_directories(json_directory);
+    const std::string noisy = sequence_path(options, "noisy"), denoised = sequence_path(options, "denoised"),
+                      refined = sequence_path(options, "refined"),
+                      final_path = sequence_path(options, "final"), masks = sequence_path(options, "masks"),
+                      reference = sequence_path(options, "reference");
+    auto json_file = [&](const char* name) { return (json_directory / name).string(); };
+    std::vector<std::string> scene_options{"--scene",    options.scene, "--size",
+                                           options.size, "--frames",    frame_range};
+
+    Json seconds;
+    auto stage_start = std::chrono::steady_clock::now();
+    std::vector<std::string> render_arguments{"render",
+                                              "-o",
+                                              noisy,
+                                              "--spp",
+                                              std::to_string(options.spp),
+                                              "--seed",
+                                              "1",
+                                              "--json",
+                                              json_file("render.json")};
+    render_arguments.insert(render_arguments.end(), scene_options.begin(), scene_options.end());
+    run_stage(render_arguments, options.common);
+    seconds["render"] = seconds_since(stage_start);
+
+    stage_start = std::chrono::steady_clock::now();
+    run_stage({"denoise", noisy, "--frames", frame_range, "--layer", "DiffInd", "-o", denoised, "--json",
+               json_file("denoise.json")},
+              options.common);
+    seconds["denoise"] = seconds_since(stage_start);
+
+    stage_start = std::chrono::steady_clock::now();
+    std::vector<std::string> refine_arguments{"refine",
+                                              "--denoised",
+                                              denoised,
+                                              "-o",
+                                              refined,
+                                              "--masks",
+                                              masks,
+                                              "--spp",
+                                              std::to_string(options.refine_spp),
+                                              "--json",
+                                              json_file("refine.json")};
+    if (options.threshold > 0)
+        refine_arguments.insert(refine_arguments.end(),
+                                {"--threshold", fmt::format("{}", options.threshold)});
+    else
+        refine_arguments.insert(refine_arguments.end(),
+                                {"--budget", fmt::format("{}", options.budget_percent)});
+    refine_arguments.insert(refine_arguments.end(), scene_options.begin(), scene_options.end());
+    run_stage(refine_arguments, options.common);
+    seconds["refine"] = seconds_since(stage_start);
+
+    RunContext context(options.common);
+    stage_start = std::chrono::steady_clock::now();
+    io::FrameSequence refined_sequence = io::find_input_sequence(refined, frame_range);
+    io::FrameSequence final_sequence = io::output_sequence(final_path, frames);
+    io::check_outputs(final_sequence.files, refined_sequence.files);
+    write_final(refined_sequence, final_sequence, context.progress());
+    seconds["composite"] = seconds_since(stage_start);
+    double our_seconds = seconds["render"].get<double>() + seconds["denoise"].get<double>() +
+                         seconds["refine"].get<double>() + seconds["composite"].get<double>();
+    seconds["total"] = our_seconds;
+
+    if (options.reference_spp > 0) {
+        stage_start = std::chrono::steady_clock::now();
+        std::vector<std::string> reference_arguments{"render",
+                                                     "-o",
+                                                     reference,
+                                                     "--spp",
+                                                     std::to_string(options.reference_spp),
+                                                     "--seed",
+                                                     "3",
+                                                     "--json",
+                                                     json_file("reference.json")};
+        reference_arguments.insert(reference_arguments.end(), scene_options.begin(), scene_options.end());
+        run_stage(reference_arguments, options.common);
+        seconds["reference"] = seconds_since(stage_start);
+    }
+
+    Json denoise_json = read_json(json_file("denoise.json")),
+         refine_json = read_json(json_file("refine.json"));
+    Json render_json = read_json(json_file("render.json"));
+    Json summary;
+    summary["version"] = version_string();
+    summary["command"] = command_line();
+    summary["scene"] = options.scene;
+    summary["frames"] = frame_range;
+    summary["size"] = options.size;
+    summary["spp"] = options.spp;
+    summary["refine_spp"] = options.refine_spp;
+    summary["rank"] = denoise_json["rank"]["n"];
+    summary["rank_rule"] = denoise_json["rank"]["rule"];
+    summary["refine_selection"] = refine_json["selection"];
+    summary["refine_budget_percent"] = refine_json["budget_percent"];
+    summary["refine_threshold"] = refine_json["threshold"];
+    summary["pixels_refined"] = refine_json["pixels_rendered"];
+    summary["percent_pixels_refined"] = refine_json["percent_rendered"];
+    summary["seconds"] = seconds;
+    summary["outputs"] = {
+        {"noisy", noisy},     {"denoised", denoised},
+        {"refined", refined}, {"final", final_path},
+        {"masks", masks},     {"contact_sheet", (directory / "contact_sheet.png").string()}};
+
+    // Measurements against the reference, and the contact sheet.
+    io::FrameSequence noisy_sequence = io::find_input_sequence(noisy, frame_range);
+    io::FrameSequence denoised_sequence = io::find_input_sequence(denoised, frame_range);
+    io::SequenceReader noisy_passes(noisy_sequence, kPassLayers), noisy_beauty(noisy_sequence, {"Combined"});
+    io::SequenceReader denoised_indirect(denoised_sequence, {"DiffInd"});
+    io::SequenceReader final_beauty(final_sequence, {"Combined"}),
+        final_indirect(final_sequence, {"DiffInd"});
+    std::unique_ptr<io::SequenceReader> reference_beauty, reference_indirect;
+    if (options.reference_spp > 0) {
+        io::FrameSequence reference_sequence = io::find_input_sequence(reference, frame_range);
+        reference_beauty =
+            std::make_unique<io::SequenceReader>(reference_sequence, std::vector<std::string>{"Combined"});
+        reference_indirect =
+            std::make_unique<io::SequenceReader>(reference_sequence, std::vector<std::string>{"DiffInd"});
+    }
+    const char* kVersions[] = {"noisy", "denoised", "refined"};
+    // [layer 0 = DiffInd, 1 = beauty][version][frame]
+    std::vector<std::vector<std::vector<double>>> errors(2, std::vector<std::vector<double>>(3));
+    std::vector<int> sheet = sheet_frame_indices(frames, options.scene);
+    std::vector<std::vector<float>> sheet_images;
+    for (int i = 0; i < static_cast<int>(frames.size()); ++i) {
+        bool on_sheet = std::find(sheet.begin(), sheet.end(), i) != sheet.end();
+        if (!on_sheet && !reference_beauty)
+            continue;
+        std::vector<float> passes = read_frame(noisy_passes, i);
+        std::vector<float> indirect[3] = {std::vector<float>(passes.size() / 4),
+                                          read_frame(denoised_indirect, i), read_frame(final_indirect, i)};
+        for (std::size_t p = 0; p < indirect[0].size() / 3; ++p)
+            for (int c = 0; c < 3; ++c)
+                indirect[0][p * 3 + c] = passes[p * 12 + 6 + c];
+        std::vector<float> beauty[3] = {read_frame(noisy_beauty, i), composite(passes, indirect[1].data()),
+                                        read_frame(final_beauty, i)};
+        std::vector<float> reference_rgb;
+        if (reference_beauty) {
+            reference_rgb = read_frame(*reference_beauty, i);
+            std::vector<float> reference_indirect_rgb = read_frame(*reference_indirect, i);
+            for (int v = 0; v < 3; ++v) {
+                errors[0][v].push_back(refine::relative_mse(indirect[v].data(), reference_indirect_rgb.data(),
+                                                            indirect[v].size()));
+                errors[1][v].push_back(
+                    refine::relative_mse(beauty[v].data(), reference_rgb.data(), beauty[v].size()));
+            }
+        }
+        if (on_sheet) {
+            for (int v = 0; v < 3; ++v)
+                sheet_images.push_back(beauty[v]);
+            if (reference_beauty)
+                sheet_images.push_back(reference_rgb);
+        }
+    }
+    int columns = reference_beauty ? 4 : 3;
+    std::vector<io::ContactSheetCell> cells;
+    for (const auto& image : sheet_images)
+        cells.push_back({noisy_passes.width(), noisy_passes.height(), image.data()});
+    io::write_contact_sheet((directory / "contact_sheet.png").string(), columns, cells, options.exposure);
+    summary["contact_sheet"] = {{"frames",
+                                 [&] {
+                                     std::vector<int> shown;
+                                     for (int i : sheet)
+                                         shown.push_back(frames[i]);
+                                     return shown;
+                                 }()},
+                                {"columns", reference_beauty
+                                                ? Json::array({"noisy", "denoised", "refined", "reference"})
+                                                : Json::array({"noisy", "denoised", "refined"})}};
+
+    if (reference_beauty) {
+        // Time model t(s) = t0 + k·s per frame from the noisy and reference renders.
+        Json reference_json = read_json(json_file("reference.json"));
+        double frame_count = static_cast<double>(frames.size());
+        double t_noisy = render_json["render_seconds"].get<double>() / frame_count;
+        double t_reference = reference_json["render_seconds"].get<double>() / frame_count;
+        refine::TimeModel time_model =
+            refine::fit_time_model(options.spp, t_noisy, options.reference_spp, t_reference);
+        Json quality;
+        quality["reference_spp"] = options.reference_spp;
+        quality["time_model"] = {{"t0_seconds", time_model.t0}, {"k_seconds_per_spp", time_model.k}};
+        auto mean_of = [](const std::vector<double>& values, const std::vector<bool>& keep) {
+            double sum = 0;
+            int count = 0;
+            for (size_t t = 0; t < values.size(); ++t)
+                if (keep[t]) {
+                    sum += values[t];
+                    ++count;
+                }
+            return count ? sum / count : 0.0;
+        };
+        std::vector<bool> all(frames.size(), true), crossing(frames.size(), false);
+        bool has_crossing = false;
+        for (size_t t = 0; t < frames.size(); ++t)
+            if (options.scene == "switch" && frames[t] >= scene::kSwitchCrossingFirstFrame &&
+                frames[t] <= scene::kSwitchCrossingLastFrame)
+                crossing[t] = has_crossing = true;
+        const char* kLayers[] = {"DiffInd", "beauty"};
+        for (int layer = 0; layer < 2; ++layer) {
+            Json entry;
+            double noisy_error = mean_of(errors[layer][0], all);
+            double c = refine::noise_constant(noisy_error, options.spp, options.reference_spp);
+            entry["c"] = c;
+            for (int v = 0; v < 3; ++v) {
+                double error = mean_of(errors[layer][v], all);
+                entry["relmse"][kVersions[v]] = error;
+                if (has_crossing)
+                    entry["relmse_crossing_frames"][kVersions[v]] = mean_of(errors[layer][v], crossing);
+                double equivalent = refine::equivalent_spp(error, c, options.reference_spp);
+                bool finite = std::isfinite(equivalent);
+                entry["equivalent_spp"][kVersions[v]] = finite ? Json(equivalent) : Json();
+                entry["beyond_reference"][kVersions[v]] = !finite || equivalent > options.reference_spp;
+                double brute_force = frame_count * time_model.seconds(equivalent);
+                double our_time = v == 0 ? seconds["render"].get<double>()
+                                  : v == 1
+                                      ? seconds["render"].get<double>() + seconds["denoise"].get<double>()
+                                      : our_seconds;
+                entry["speedup"][kVersions[v]] = finite ? Json(brute_force / our_time) : Json();
+            }
+            entry["note"] = "beyond_reference: the error is within a few times the reference's own, so the "
+                            "equivalent spp (null: not measurable at all) and speed-up are extrapolated; "
+                            "render a reference with more spp";
+            quality[kLayers[layer]] = entry;
+        }
+        quality["per_frame"] = Json::array();
+        for (size_t t = 0; t < frames.size(); ++t)
+            quality["per_frame"].push_back({{"frame", frames[t]},
+                                            {"DiffInd", {errors[0][0][t], errors[0][1][t], errors[0][2][t]}},
+                                            {"beauty", {errors[1][0][t], errors[1][1][t], errors[1][2][t]}}});
+        summary["quality"] = quality;
+    }
+    summary["seconds"]["wall"] = seconds_since(start);
+    io::write_text_file((directory / "summary.json").string(), summary.dump(2) + "\n");
+    if (!options.common.quiet) {
+        std::fprintf(stderr,
+                     "run: %s, %zu frames, N = %d modes, %.2f %% of pixels refined, %.1f s (render %.1f, "
+                     "denoise %.1f, refine %.1f, composite %.1f)\n",
+                     options.scene.c_str(), frames.size(), summary["rank"].get<int>(),
+                     summary["percent_pixels_refined"].get<double>(), our_seconds,
+                     seconds["render"].get<double>(), seconds["denoise"].get<double>(),
+                     seconds["refine"].get<double>(), seconds["composite"].get<double>());
+        std::fprintf(stderr, "run: results in %s (summary.json, contact_sheet.png, final/, refined/, ...)\n",
+                     options.directory.c_str());
+    }
+    return 0;
+}
+
+} // namespace
+
+Subcommand add_run_command(CLI::App& parent)
+{
+    auto options = std::make_shared<RunOptions>();
+    CLI::App* command = parent.add_subcommand(
+        "run",
+        "The main job: render the noisy pass, denoise its indirect light, refine, composite, summarize");
+    command->add_option("--scene", options->scene, "Built-in scene (see render --scene list)");
+    command->add_option("-o,--output", options->directory,
+                        "Output directory: noisy/, denoised/, refined/, final/, masks/, summary.json, "
+                        "contact_sheet.png");
+    command->add_option("--size", options->size, "Image size WIDTHxHEIGHT");
+    command->add_option("--frames", options->frames, "Frames (default: all of the scene's frames)");
+    command->add_option("--spp", options->spp, "Samples per pixel of the noisy pass")
+        ->check(CLI::PositiveNumber);
+    command->add_option("--refine-spp", options->refine_spp, "Samples per pixel of the re-rendered pixels")
+        ->check(CLI::PositiveNumber);
+    auto* budget = command
+                       ->add_option("--budget", options->budget_percent,
+                                    "Re-render this % of the shot's pixels (the most unsure ones)")
+                       ->check(CLI::Range(0.0, 100.0));
+    command
+        ->add_option("--threshold", options->threshold,
+                     "Instead of --budget: re-render pixels whose relative sigma is at least this")
+        ->check(CLI::PositiveNumber)
+        ->excludes(budget);
+    command
+        ->add_option("--reference-spp", options->reference_spp,
+                     "Also render a reference at this spp and measure relMSE, equivalent spp and speed-up "
+                     "(0 = no reference)")
+        ->check(CLI::NonNegativeNumber);
+    command->add_option("--exposure", options->exposure, "Exposure of the contact sheet, in stops");
+    add_common_options(*command, options->common);
+    return {command, [options] { return run_run(*options); }};
+}
+
+} // namespace modestack::app

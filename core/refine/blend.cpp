@@ -1,0 +1,38 @@
+#include "core/refine/blend.h"
+
+#include <cmath>
+
+namespace modestack::refine {
+
+void blend_refined(const float* weights, std::size_t pixels, int channels, const float* rendered,
+                   const float* rendered_variance, float* value, float* sigma)
+{
+    for (std::size_t p = 0; p < pixels; ++p) {
+        double w = weights[p];
+        if (!(w > 0))
+            continue;
+        for (int c = 0; c < channels; ++c) {
+            std::size_t i = p * channels + c;
+            double old_sigma = sigma[i];
+            double variance = std::fmax(0.0, rendered_variance[i]);
+            value[i] = static_cast<float>(w * rendered[i] + (1.0 - w) * value[i]);
+            sigma[i] = static_cast<float>(
+                std::sqrt(w * w * variance + (1.0 - w) * (1.0 - w) * old_sigma * old_sigma));
+        }
+    }
+}
+
+double estimated_relative_mse(const float* value, const float* sigma, std::size_t pixels, int channels,
+                              float dark_floor)
+{
+    if (pixels == 0 || channels == 0)
+        return 0.0;
+    double floor_squared = static_cast<double>(dark_floor) * dark_floor, sum = 0.0;
+    for (std::size_t i = 0; i < pixels * channels; ++i) {
+        double v = value[i], s = sigma[i];
+        sum += s * s / (v * v + floor_squared);
+    }
+    return sum / static_cast<double>(pixels * channels);
+}
+
+} // namespace modestack::refine
