@@ -259,7 +259,7 @@ TEST_CASE("compare: different sizes or channels exit 3, missing or unreadable in
 }
 
 TEST_CASE(
-    "compare: --layer picks a Cycles-style layer of multi-layer files; without it the layers are listed")
+    "compare: --layer picks a Cycles-style layer of multi-layer files, without it the layers are listed")
 {
     TempDir dir;
     testkit::ExrLayout layout = float_rgb();

@@ -47,7 +47,7 @@ TEST_CASE("layers: without --layer the only RGB set is used, otherwise the error
     }
 }
 
-TEST_CASE("layers: a selector matching two view layers is ambiguous; unknown names list what exists")
+TEST_CASE("layers: a selector matching two view layers is ambiguous and unknown names list what exists")
 {
     std::vector<std::string> channels{"left.DiffInd.R", "left.DiffInd.G", "left.DiffInd.B",
                                       "right.DiffInd.R", "right.DiffInd.G", "right.DiffInd.B"};

@@ -37,7 +37,7 @@ TEST_CASE("patterns: #### is four digits, # is four digits, @ one digit each, %0
     CHECK_FALSE(io::normalize_pattern("shot.exr", printf_pattern, range));
 }
 
-TEST_CASE("frame ranges: plain, 1001-based, stepped, lists; malformed ones are usage errors")
+TEST_CASE("frame ranges: plain, 1001-based, stepped, lists, and malformed ones are usage errors")
 {
     CHECK(io::parse_frame_range("1-5") == std::vector<int>{1, 2, 3, 4, 5});
     CHECK(io::parse_frame_range("1001-1003") == std::vector<int>{1001, 1002, 1003});
