@@ -7,6 +7,7 @@
 // Combined included, is copied untouched: the final beauty is composited by
 // `modestack run` (beauty = DiffCol × (DiffDir + DiffInd) + Emit, [0017]).
 #include "app/command.h"
+#include "app/option_values.h"
 #include "app/run_context.h"
 #include "core/common/error.h"
 #include "core/refine/refine_frame.h"
@@ -43,18 +44,6 @@ struct RefineOptions {
     refine::RefineSettings settings;
     CommonOptions common;
 };
-
-void parse_size(const std::string& text, int& width, int& height)
-{
-    unsigned long long w = 0, h = 0;
-    char tail = 0;
-    if (std::sscanf(text.c_str(), "%llux%llu%c", &w, &h, &tail) != 2 || w == 0 || h == 0 || w > 65536 ||
-        h > 65536)
-        throw usage_error(
-            fmt::format("--size '{}': write WIDTHxHEIGHT, e.g. 320x240 (each 1 to 65536)", text));
-    width = static_cast<int>(w);
-    height = static_cast<int>(h);
-}
 
 const scene::SceneInfo& find_scene(const std::string& name)
 {
@@ -135,7 +124,7 @@ int run_refine(RefineOptions& options)
     if (options.denoised.empty() || options.output.empty())
         throw usage_error("refine needs --denoised SEQ and -o SEQ");
     render::RenderOptions& render_options = options.settings.render;
-    parse_size(options.size, render_options.width, render_options.height);
+    parse_image_size(options.size, render_options.width, render_options.height);
     render::validate_render_options(render_options);
     refine::validate_feather_options(options.settings.feather);
     if (options.budget_percent > 100)

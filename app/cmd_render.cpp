@@ -3,6 +3,7 @@
 // or --fixed-seed), optionally only the pixels of a mask sequence, and writes
 // one multi-layer EXR per frame with Cycles-style AOV names and provenance.
 #include "app/command.h"
+#include "app/option_values.h"
 #include "app/run_context.h"
 #include "core/common/error.h"
 #include "core/render/render.h"
@@ -31,16 +32,6 @@ struct RenderCommandOptions {
     render::RenderOptions render;
     CommonOptions common;
 };
-
-void parse_size(const std::string& text, int& width, int& height)
-{
-    unsigned long long w = 0, h = 0;
-    char tail = 0;
-    if (std::sscanf(text.c_str(), "%llux%llu%c", &w, &h, &tail) != 2 || w == 0 || h == 0 || w > 65536 || h > 65536)
-        throw usage_error(fmt::format("--size '{}': write WIDTHxHEIGHT, e.g. 320x240 (each 1 to 65536)", text));
-    width = static_cast<int>(w);
-    height = static_cast<int>(h);
-}
 
 // Channel types written: colour layers in half as renderers write beauty passes;
 // geometry and the variance in float, where half's precision would hurt.
@@ -102,7 +93,7 @@ int run_render(RenderCommandOptions& options)
         return list_scenes();
     if (options.output.empty())
         throw usage_error("render needs -o SEQ (e.g. -o noisy/shot.####.exr)");
-    parse_size(options.size, options.render.width, options.render.height);
+    parse_image_size(options.size, options.render.width, options.render.height);
     render::validate_render_options(options.render);
     const scene::SceneInfo* info = nullptr;
     for (const auto& candidate : scene::builtin_scenes())

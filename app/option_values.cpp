@@ -5,6 +5,7 @@
 #include <fmt/format.h>
 
 #include <cctype>
+#include <cstdio>
 #include <cstdlib>
 
 namespace modestack::app {
@@ -26,6 +27,16 @@ std::int64_t parse_memory_size(const std::string& text, const std::string& optio
     if (end == text.c_str() || scale == 0 || !(value > 0))
         throw usage_error(fmt::format("{} '{}': not a memory size (examples: 512M, 2G)", option, text));
     return static_cast<std::int64_t>(value * scale);
+}
+
+void parse_image_size(const std::string& text, int& width, int& height)
+{
+    unsigned long long w = 0, h = 0;
+    char tail = 0;
+    if (std::sscanf(text.c_str(), "%llux%llu%c", &w, &h, &tail) != 2 || w == 0 || h == 0 || w > 65536 || h > 65536)
+        throw usage_error(fmt::format("--size '{}': write WIDTHxHEIGHT, e.g. 320x240 (each 1 to 65536)", text));
+    width = static_cast<int>(w);
+    height = static_cast<int>(h);
 }
 
 }  // namespace modestack::app

@@ -3,6 +3,7 @@
 // kept shots and for 1 and 2 threads, and clear errors for bad settings.
 #include "core/common/error.h"
 #include "core/denoise/engine.h"
+#include "tests/denoise/memory_shot.h"
 
 #include <doctest/doctest.h>
 #include <tbb/task_arena.h>
@@ -13,42 +14,9 @@
 
 using namespace modestack;
 using namespace modestack::denoise;
+using namespace modestack::denoise::testing;
 
 namespace {
-
-// A shot held in memory: frames of width × height × channels floats.
-struct MemoryShot : FrameSource {
-    ShotShape size;
-    std::vector<std::vector<float>> frames;
-    ShotShape shape() const override { return size; }
-    void read_rows(int frame, int row_begin, int row_end, float* destination) override
-    {
-        std::size_t row = static_cast<std::size_t>(size.width) * size.channels;
-        std::copy(frames[frame].begin() + row_begin * row, frames[frame].begin() + row_end * row, destination);
-    }
-};
-
-// Collects what the engine writes, checking rows arrive in order.
-struct MemorySink : FrameSink {
-    ShotShape size;
-    std::vector<std::vector<float>> rebuilt, sigma;
-    std::vector<int> next_row;
-    explicit MemorySink(const ShotShape& shape)
-        : size(shape),
-          rebuilt(shape.frames, std::vector<float>(std::size_t(shape.width) * shape.height * shape.channels)),
-          sigma(rebuilt),
-          next_row(shape.frames, 0)
-    {
-    }
-    void write_rows(int frame, int row_begin, int row_end, const float* values, const float* errors) override
-    {
-        CHECK(row_begin == next_row[frame]);
-        next_row[frame] = row_end;
-        std::size_t row = static_cast<std::size_t>(size.width) * size.channels;
-        std::copy(values, values + (row_end - row_begin) * row, rebuilt[frame].begin() + row_begin * row);
-        std::copy(errors, errors + (row_end - row_begin) * row, sigma[frame].begin() + row_begin * row);
-    }
-};
 
 // Rank-3 signal: three smooth spatial patterns with smooth temporal weights.
 MemoryShot low_rank_shot(int width, int height, int frames, float noise, unsigned seed)

@@ -5,6 +5,7 @@
 // error; sigma stays calibrated; streamed, kept, 1- and 2-thread runs give the same bits.
 #include "core/denoise/engine.h"
 #include "core/denoise/mode_filter.h"
+#include "tests/denoise/memory_shot.h"
 
 #include <doctest/doctest.h>
 #include <tbb/task_arena.h>
@@ -15,34 +16,9 @@
 
 using namespace modestack;
 using namespace modestack::denoise;
+using namespace modestack::denoise::testing;
 
 namespace {
-
-struct MemoryShot : FrameSource {
-    ShotShape size;
-    std::vector<std::vector<float>> frames;
-    ShotShape shape() const override { return size; }
-    void read_rows(int frame, int row_begin, int row_end, float* destination) override
-    {
-        std::size_t row = static_cast<std::size_t>(size.width) * size.channels;
-        std::copy(frames[frame].begin() + row_begin * row, frames[frame].begin() + row_end * row, destination);
-    }
-};
-
-struct MemorySink : FrameSink {
-    std::vector<std::vector<float>> rebuilt, sigma;
-    std::size_t row_length;
-    explicit MemorySink(const ShotShape& shape)
-        : rebuilt(shape.frames, std::vector<float>(std::size_t(shape.width) * shape.height * shape.channels)),
-          sigma(rebuilt), row_length(std::size_t(shape.width) * shape.channels)
-    {
-    }
-    void write_rows(int frame, int row_begin, int row_end, const float* values, const float* errors) override
-    {
-        std::copy(values, values + (row_end - row_begin) * row_length, rebuilt[frame].begin() + row_begin * row_length);
-        std::copy(errors, errors + (row_end - row_begin) * row_length, sigma[frame].begin() + row_begin * row_length);
-    }
-};
 
 // Coefficient images of `modes` modes, one channel, [mode][y][x], with their noise.
 struct Images {

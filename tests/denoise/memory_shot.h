@@ -1,0 +1,49 @@
+// Test doubles of the denoise engine's stream ends: a shot held in memory and a
+// sink that collects what the engine writes, checking rows arrive in order.
+#pragma once
+
+#include "core/denoise/frame_stream.h"
+
+#include <doctest/doctest.h>
+
+#include <algorithm>
+#include <cstddef>
+#include <vector>
+
+namespace modestack::denoise::testing {
+
+// A shot held in memory: frames of width × height × channels floats.
+struct MemoryShot : FrameSource {
+    ShotShape size;
+    std::vector<std::vector<float>> frames;
+    ShotShape shape() const override { return size; }
+    void read_rows(int frame, int row_begin, int row_end, float* destination) override
+    {
+        std::size_t row = static_cast<std::size_t>(size.width) * size.channels;
+        std::copy(frames[frame].begin() + row_begin * row, frames[frame].begin() + row_end * row, destination);
+    }
+};
+
+// Collects what the engine writes, checking rows arrive in order.
+struct MemorySink : FrameSink {
+    ShotShape size;
+    std::vector<std::vector<float>> rebuilt, sigma;
+    std::vector<int> next_row;
+    explicit MemorySink(const ShotShape& shape)
+        : size(shape),
+          rebuilt(shape.frames, std::vector<float>(std::size_t(shape.width) * shape.height * shape.channels)),
+          sigma(rebuilt),
+          next_row(shape.frames, 0)
+    {
+    }
+    void write_rows(int frame, int row_begin, int row_end, const float* values, const float* errors) override
+    {
+        CHECK(row_begin == next_row[frame]);
+        next_row[frame] = row_end;
+        std::size_t row = static_cast<std::size_t>(size.width) * size.channels;
+        std::copy(values, values + (row_end - row_begin) * row, rebuilt[frame].begin() + row_begin * row);
+        std::copy(errors, errors + (row_end - row_begin) * row, sigma[frame].begin() + row_begin * row);
+    }
+};
+
+}  // namespace modestack::denoise::testing
