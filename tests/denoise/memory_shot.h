@@ -46,4 +46,15 @@ struct MemorySink : FrameSink {
     }
 };
 
+/// Mean squared difference of two shots of the same size (frames of samples).
+inline double mean_square(const std::vector<std::vector<float>>& a, const std::vector<std::vector<float>>& b)
+{
+    double sum = 0;
+    std::size_t count = 0;
+    for (std::size_t t = 0; t < a.size(); ++t)
+        for (std::size_t i = 0; i < a[t].size(); ++i, ++count)
+            sum += (double(a[t][i]) - b[t][i]) * (double(a[t][i]) - b[t][i]);
+    return sum / count;
+}
+
 }  // namespace modestack::denoise::testing

@@ -41,16 +41,6 @@ MemoryShot low_rank_shot(int width, int height, int frames, float noise, unsigne
     return shot;
 }
 
-double mse(const std::vector<std::vector<float>>& a, const std::vector<std::vector<float>>& b)
-{
-    double sum = 0;
-    std::size_t count = 0;
-    for (std::size_t t = 0; t < a.size(); ++t)
-        for (std::size_t i = 0; i < a[t].size(); ++i, ++count)
-            sum += (double(a[t][i]) - b[t][i]) * (double(a[t][i]) - b[t][i]);
-    return sum / count;
-}
-
 }  // namespace
 
 TEST_CASE("engine: a rank-3 shot is recovered exactly with 3 modes")
@@ -63,7 +53,7 @@ TEST_CASE("engine: a rank-3 shot is recovered exactly with 3 modes")
     Report report = run_denoise(shot, sink, settings, Progress::silent());
     CHECK(report.plan.in_memory);
     CHECK(report.passes == 1);
-    CHECK(mse(sink.rebuilt, shot.frames) < 1e-10);
+    CHECK(mean_square(sink.rebuilt, shot.frames) < 1e-10);
     CHECK(report.singular_values[3] < 1e-5 * report.singular_values[0]);
 }
 
@@ -78,7 +68,7 @@ TEST_CASE("engine: with noise, press chooses the 3 modes and the rebuild keeps a
         settings.outliers.fireflies = false;  // Gaussian noise has no fireflies to treat
         Report report = run_denoise(noisy, sink, settings, Progress::silent());
         CHECK(report.rank.rank == 3);
-        double kept = mse(sink.rebuilt, clean.frames) / (0.2 * 0.2);
+        double kept = mean_square(sink.rebuilt, clean.frames) / (0.2 * 0.2);
         CHECK(kept == doctest::Approx(3.0 / frames).epsilon(0.2));
     }
 }
@@ -113,7 +103,7 @@ TEST_CASE("engine: streamed and kept shots, gram and rsvd, 1 and 2 threads give 
     CHECK(rsvd_streamed_report.passes > 2);
     CHECK(rsvd_kept.rebuilt == rsvd_streamed.rebuilt);
     CHECK(rsvd_kept_report.rank.rank == kept_report.rank.rank);
-    CHECK(mse(rsvd_kept.rebuilt, kept.rebuilt) < 1e-10);
+    CHECK(mean_square(rsvd_kept.rebuilt, kept.rebuilt) < 1e-10);
 }
 
 TEST_CASE("engine: bad settings are usage errors before anything is written")

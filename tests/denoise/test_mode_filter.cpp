@@ -88,16 +88,6 @@ MemoryShot two_mode_shot(int width, int height, int frames, double weak, double 
     return shot;
 }
 
-double mean_square(const std::vector<std::vector<float>>& a, const std::vector<std::vector<float>>& b)
-{
-    double sum = 0;
-    std::size_t count = 0;
-    for (std::size_t t = 0; t < a.size(); ++t)
-        for (std::size_t i = 0; i < a[t].size(); ++i, ++count)
-            sum += (double(a[t][i]) - b[t][i]) * (double(a[t][i]) - b[t][i]);
-    return sum / count;
-}
-
 }  // namespace
 
 TEST_CASE("mode filter: SURE keeps every mode unfiltered when there is no noise")
