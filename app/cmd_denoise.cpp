@@ -3,6 +3,7 @@
 // streaming engine (core/denoise), writes each output frame atomically with
 // its sigma channels and provenance, and a JSON summary when asked.
 #include "app/command.h"
+#include "app/memory_budget.h"
 #include "app/option_values.h"
 #include "app/run_context.h"
 #include "app/sequence_adapters.h"
@@ -29,7 +30,7 @@ struct DenoiseOptions {
     std::string rank = "auto";
     std::string rank_rule = "press";
     std::string method = "auto";
-    std::string max_memory = "2G";
+    std::string max_memory = "auto";
     std::string frames;
     std::string json_path;
     std::string save_modes;
@@ -76,7 +77,7 @@ denoise::Settings make_settings(const DenoiseOptions& options)
                                       options.rank_rule));
     settings.mode_filter.max_modes = options.mode_filter_modes;
     settings.mode_filter.widths = options.mode_filter_widths;
-    settings.max_memory_bytes = parse_memory_size(options.max_memory, "--max-memory");
+    settings.max_memory_bytes = parse_memory_budget(options.max_memory, "--max-memory");
     return settings;
 }
 
@@ -155,7 +156,7 @@ nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::Seq
                        {"rebuild", report.seconds_rebuild},
                        {"total", seconds_total}};
     json["peak_memory_bytes"] = peak_resident_bytes();
-    json["max_memory_bytes"] = parse_memory_size(options.max_memory, "--max-memory");
+    json["max_memory_bytes"] = parse_memory_budget(options.max_memory, "--max-memory");
     return json;
 }
 
@@ -257,7 +258,8 @@ Subcommand add_denoise_command(CLI::App& parent)
     command->add_option("--method", options->method, "Solver: auto, gram (exact F x F eigenproblem) or rsvd "
                                                       "(randomized SVD)");
     command->add_option("--max-memory", options->max_memory,
-                        "Working memory: the shot is kept in memory if it fits, else streamed in bands (512M, 2G)");
+                        "Working memory: the shot is kept in memory if it fits, else streamed in bands (512M, 2G; "
+                        "default auto: a quarter of the machine's or container's memory)");
     command->add_option("--frames", options->frames, "Only these frames: 1-48, 1001-1100, 1-100x2, 1,3,7-9");
     command->add_option("--json", options->json_path, "Write a JSON summary: N and why, spectrum, counts, timings");
     command->add_option("--save-modes", options->save_modes,

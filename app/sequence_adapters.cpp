@@ -53,7 +53,9 @@ void SequenceSink::write_rows(int frame_index, int row_begin, int row_end, const
     if (!output)
         return;
     thread_local std::vector<unsigned char> native;
-    m_reader.read_native(frame_index, row_begin, row_end, native);
+    native.clear();
+    if (output->needs_input_rows())  // pass-through channels to copy
+        m_reader.read_native(frame_index, row_begin, row_end, native);
     output->write_replaced_rows(row_begin, row_end, native, rebuilt, sigma);
 }
 

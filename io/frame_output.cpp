@@ -170,13 +170,16 @@ void FrameOutput::write_replaced_rows(int row_begin, int row_end, const std::vec
     size_t pixels = static_cast<size_t>(input_spec.width) * (row_end - row_begin);
     size_t in_bytes = source.native_pixel_bytes, out_bytes = m_state->output_pixel_bytes;
     size_t replaced_count = source.selected.size(), extra_count = m_state->extra_types.size();
-    if (input_native.size() != pixels * in_bytes)
+    // Without pass-through channels every input byte is overwritten: no input rows needed.
+    const bool copy_input = needs_input_rows();
+    if (copy_input && input_native.size() != pixels * in_bytes)
         throw internal_error("native row buffer has the wrong size");
     m_state->scratch.resize(pixels * out_bytes);
     unsigned char* out = m_state->scratch.data();
     for (size_t p = 0; p < pixels; ++p) {
         unsigned char* pixel = out + p * out_bytes;
-        std::memcpy(pixel, input_native.data() + p * in_bytes, in_bytes);
+        if (copy_input)
+            std::memcpy(pixel, input_native.data() + p * in_bytes, in_bytes);
         for (size_t k = 0; k < replaced_count; ++k) {
             int channel = source.selected[k];
             store_value(replaced[p * replaced_count + k], input_spec.channelformat(channel),
@@ -191,6 +194,12 @@ void FrameOutput::write_replaced_rows(int row_begin, int row_end, const std::vec
     const OIIO::ImageSpec& spec = m_state->spec;
     if (!m_state->output->write_scanlines(spec.y + row_begin, spec.y + row_end, spec.z, OIIO::TypeUnknown, out))
         fail(fmt::format("cannot write rows {}-{}", row_begin, row_end - 1));
+}
+
+bool FrameOutput::needs_input_rows() const
+{
+    const detail::OpenFrame* source = m_state->source;
+    return source && static_cast<int>(source->selected.size()) < source->spec.nchannels;
 }
 
 void FrameOutput::write_float_rows(int row_begin, int row_end, const float* pixels)

@@ -60,9 +60,13 @@ public:
     /// of a copied frame: `input_native` holds those rows of every input channel
     /// in native types (SequenceReader::read_native), `replaced` the new values
     /// of the selected channels and `extra` the appended channels, both float,
-    /// interleaved [row][x][channel].
+    /// interleaved [row][x][channel]. `input_native` may be empty when
+    /// needs_input_rows() is false.
     void write_replaced_rows(int row_begin, int row_end, const std::vector<unsigned char>& input_native,
                              const float* replaced, const float* extra);
+    /// Whether a copied frame has channels that are passed through (not replaced),
+    /// i.e. whether write_replaced_rows needs the input's native rows.
+    bool needs_input_rows() const;
     /// Writes rows of a new image from float data, all channels interleaved.
     void write_float_rows(int row_begin, int row_end, const float* pixels);
     /// Closes the file and renames it to its final name. Throws Error on failure.

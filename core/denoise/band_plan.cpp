@@ -7,36 +7,52 @@
 #include <algorithm>
 
 namespace modestack::denoise {
+namespace {
 
-std::int64_t bytes_per_band_row(const ShotShape& shape, int modes)
+std::int64_t samples_per_row(const ShotShape& shape) { return static_cast<std::int64_t>(shape.width) * shape.channels; }
+
+std::int64_t mebibytes_rounded_up(std::int64_t bytes) { return (bytes + (1 << 20) - 1) >> 20; }
+
+}  // namespace
+
+std::int64_t input_bytes_per_row(const ShotShape& shape)
 {
-    // Input, rebuilt, sigma and sigma's noise power for every frame, plus the
-    // spatial coefficients.
-    std::int64_t samples = static_cast<std::int64_t>(shape.width) * shape.channels;
-    return samples * sizeof(float) * (4 * static_cast<std::int64_t>(shape.frames) + modes);
+    return samples_per_row(shape) * static_cast<std::int64_t>(sizeof(float)) * shape.frames;
+}
+
+std::int64_t work_bytes_per_row(const ShotShape& shape, int modes)
+{
+    return samples_per_row(shape) * static_cast<std::int64_t>(sizeof(float)) *
+           (3 * static_cast<std::int64_t>(shape.frames) + modes);
 }
 
 BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int halo_rows, int modes)
 {
     BandPlan plan;
     plan.halo_rows = halo_rows;
-    std::int64_t per_row = bytes_per_band_row(shape, modes);
-    std::int64_t whole = per_row * shape.height;
-    if (whole <= max_memory_bytes) {
+    const std::int64_t input_row = input_bytes_per_row(shape), work_row = work_bytes_per_row(shape, modes);
+    const std::int64_t kept = input_row * shape.height;
+    const std::int64_t smallest_work = work_row * (std::min(kChunkRows, shape.height) + 2 * halo_rows);
+    if (kept + smallest_work <= max_memory_bytes) {
         plan.in_memory = true;
-        plan.band_rows = shape.height;
-        plan.estimated_bytes = whole;
+        std::int64_t rows = (max_memory_bytes - kept) / work_row - 2 * halo_rows;
+        rows = std::min<std::int64_t>({rows / kChunkRows * kChunkRows, kMaxKeptBandRows, shape.height});
+        plan.band_rows = static_cast<int>(std::max<std::int64_t>(rows, std::min(kChunkRows, shape.height)));
+        plan.estimated_bytes = kept + work_row * (plan.band_rows + 2 * halo_rows);
         return plan;
     }
-    std::int64_t rows = max_memory_bytes / per_row - 2 * halo_rows;
+    // Streaming: a read band and pass 2's buffers per row, and the outlier marks.
+    const std::int64_t per_row = input_row + work_row;
+    const std::int64_t marks = samples_per_row(shape) * shape.height;
+    std::int64_t rows = (max_memory_bytes - marks) / per_row - 2 * halo_rows;
     rows = rows / kChunkRows * kChunkRows;
     if (rows < kChunkRows)
         throw usage_error(fmt::format("--max-memory {} MiB is too small for {} frames of width {}: a band of {} rows "
                                       "needs {} MiB",
                                       max_memory_bytes >> 20, shape.frames, shape.width, kChunkRows,
-                                      (per_row * (kChunkRows + 2 * halo_rows) + (1 << 20) - 1) >> 20));
+                                      mebibytes_rounded_up(per_row * (kChunkRows + 2 * halo_rows) + marks)));
     plan.band_rows = static_cast<int>(std::min<std::int64_t>(rows, shape.height));
-    plan.estimated_bytes = per_row * (plan.band_rows + 2 * halo_rows);
+    plan.estimated_bytes = marks + per_row * (plan.band_rows + 2 * halo_rows);
     return plan;
 }
 

@@ -18,17 +18,17 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-// A band of rows [row_begin, row_end) of every frame, frame-major.
+// Rows [row_begin, row_end) of every frame: sample i of frame t is data[t * stride + i].
+// Either read from the source into `storage`, or a window into the kept shot.
 struct Band {
     int row_begin = 0;
     int row_end = 0;
-    std::int64_t rows = 0;  // samples per frame: width * (row_end - row_begin) * channels
-    std::vector<float> values;
+    std::int64_t rows = 0;    // samples per frame: width * (row_end - row_begin) * channels
+    std::int64_t stride = 0;  // samples from one frame to the next
+    float* data = nullptr;
+    std::vector<float> storage;
 
-    lowrank::MutableBandView view(int frames)
-    {
-        return {values.data(), rows, frames, rows};
-    }
+    lowrank::MutableBandView view(int frames) const { return {data, rows, frames, stride}; }
 };
 
 class Engine {
@@ -105,15 +105,38 @@ private:
         band.row_begin = row_begin;
         band.row_end = row_end;
         band.rows = static_cast<std::int64_t>(m_shape.width) * (row_end - row_begin) * m_shape.channels;
-        band.values.resize(static_cast<size_t>(band.rows) * m_shape.frames);
+        band.stride = band.rows;
+        band.storage.resize(static_cast<size_t>(band.rows) * m_shape.frames);
+        band.data = band.storage.data();
         tbb::parallel_for(0, m_shape.frames, [&](int frame) {
-            m_source.read_rows(frame, row_begin, row_end, band.values.data() + frame * band.rows);
+            m_source.read_rows(frame, row_begin, row_end, band.data + frame * band.rows);
         });
-        lowrank::OutlierCounts found = lowrank::clean_outliers(band.view(m_shape.frames), m_settings.outliers);
+        // The first read of a row finds its outliers and marks the rows it changed;
+        // later reads of a streamed shot redo only the marked rows (same input,
+        // same result), instead of three medians for every sample again.
+        const std::int64_t first_sample = static_cast<std::int64_t>(row_begin) * m_shape.width * m_shape.channels;
         if (counts) {
+            std::uint8_t* marks = m_report.plan.in_memory ? nullptr : m_cleaned_samples.data() + first_sample;
+            lowrank::OutlierCounts found = lowrank::clean_outliers(band.view(m_shape.frames), m_settings.outliers, marks);
             counts->non_finite += found.non_finite;
             counts->fireflies += found.fireflies;
+        } else {
+            lowrank::clean_marked_outliers(band.view(m_shape.frames), m_settings.outliers,
+                                           m_cleaned_samples.data() + first_sample);
         }
+    }
+
+    // The window of rows [row_begin, row_end) of the kept shot.
+    Band window(int row_begin, int row_end) const
+    {
+        const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
+        Band band;
+        band.row_begin = row_begin;
+        band.row_end = row_end;
+        band.rows = row_samples * (row_end - row_begin);
+        band.stride = m_whole.stride;
+        band.data = m_whole.data + row_samples * row_begin;
+        return band;
     }
 
     // Visits the shot in bands in a fixed order: the kept shot when it is in
@@ -128,12 +151,20 @@ private:
             return;
         }
         m_progress.begin(fmt::format("pass {}: reading {} frames", m_report.passes, m_shape.frames), m_shape.height);
-        Band band;
-        for (int row = 0; row < m_shape.height; row += plan.band_rows) {
-            int end = std::min(m_shape.height, row + plan.band_rows);
-            read_band(plan.in_memory ? m_whole : band, row, end, first_pass ? &m_report.outliers : nullptr);
-            visit(plan.in_memory ? m_whole : band);
-            m_progress.advance(end - row);
+        if (plan.in_memory) {
+            read_band(m_whole, 0, m_shape.height, &m_report.outliers);
+            visit(m_whole);
+            m_progress.advance(m_shape.height);
+        } else {
+            if (first_pass)
+                m_cleaned_samples.assign(static_cast<size_t>(m_shape.width) * m_shape.height * m_shape.channels, 0);
+            Band band;
+            for (int row = 0; row < m_shape.height; row += plan.band_rows) {
+                int end = std::min(m_shape.height, row + plan.band_rows);
+                read_band(band, row, end, first_pass ? &m_report.outliers : nullptr);
+                visit(band);
+                m_progress.advance(end - row);
+            }
         }
         m_progress.end();
     }
@@ -145,8 +176,8 @@ private:
         std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
         for (int row = band.row_begin; row < band.row_end; row += kChunkRows) {
             int end = std::min(band.row_end, row + kChunkRows);
-            lowrank::BandView chunk{band.values.data() + (row - band.row_begin) * row_samples,
-                                    (end - row) * row_samples, m_shape.frames, band.rows};
+            lowrank::BandView chunk{band.data + (row - band.row_begin) * row_samples, (end - row) * row_samples,
+                                    m_shape.frames, band.stride};
             add(chunk);
         }
     }
@@ -194,10 +225,12 @@ private:
     // with the plan's halo rows around them.
     Band& band_with_halo(Band& band, int row, int end)
     {
-        if (m_report.plan.in_memory)
-            return m_whole;
         int halo = m_report.plan.halo_rows;
-        read_band(band, std::max(0, row - halo), std::min(m_shape.height, end + halo), nullptr);
+        int begin = std::max(0, row - halo), stop = std::min(m_shape.height, end + halo);
+        if (m_report.plan.in_memory)
+            band = window(begin, stop);
+        else
+            read_band(band, begin, stop, nullptr);
         return band;
     }
 
@@ -226,7 +259,7 @@ private:
         for (int row = 0; row < m_shape.height; row += plan.band_rows) {
             int end = std::min(m_shape.height, row + plan.band_rows);
             Band& data = band_with_halo(band, row, end);
-            lowrank::BandView noisy{data.values.data(), data.rows, m_shape.frames, data.rows};
+            lowrank::BandView noisy = data.view(m_shape.frames).view();
             coefficients.resize(static_cast<size_t>(data.rows) * m_filter_modes);
             lowrank::MutableBandView coefficient_view{coefficients.data(), data.rows, m_filter_modes, data.rows};
             lowrank::project_coefficients(noisy, temporal, coefficient_view);
@@ -256,7 +289,7 @@ private:
         const int frames = m_shape.frames;
         const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
         const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
-        lowrank::BandView noisy{data.values.data(), data.rows, frames, data.rows};
+        lowrank::BandView noisy = data.view(frames).view();
         lowrank::BandView surveyed{coefficients.data(), data.rows, m_filter_modes, data.rows};
         lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
         std::vector<float> noise_variance, filtered(static_cast<size_t>(valid) * rank), gains;
@@ -305,19 +338,20 @@ private:
             int end = std::min(m_shape.height, row + plan.band_rows);
             Band& data = band_with_halo(band, row, end);
             throw_if_cancelled();
-            lowrank::BandView noisy{data.values.data(), data.rows, frames, data.rows};
+            lowrank::BandView noisy = data.view(frames).view();
 
             std::vector<float> coefficients(static_cast<size_t>(data.rows) * projected);
             lowrank::MutableBandView coefficient_view{coefficients.data(), data.rows, projected, data.rows};
             lowrank::project_coefficients(noisy, temporal_projected, coefficient_view);
-            rebuilt.resize(data.values.size());
+            const size_t band_samples = static_cast<size_t>(data.rows) * frames;
+            rebuilt.resize(band_samples);
             lowrank::MutableBandView rebuilt_view{rebuilt.data(), data.rows, frames, data.rows};
             // The unfiltered rebuild of the whole band: sigma reads its residual.
             lowrank::rebuild_from_coefficients({coefficients.data(), data.rows, rank, data.rows}, temporal,
                                                rebuilt_view);
             // Sigma only for the band's own rows, laid out like the rebuilt band.
             std::int64_t offset = (row - data.row_begin) * row_samples;
-            sigma.assign(data.values.size(), 0.0f);
+            sigma.assign(band_samples, 0.0f);
             lowrank::MutableBandView sigma_view{sigma.data() + offset, (end - row) * row_samples, frames, data.rows};
             lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
             lowrank::BandView kept_noise_view{};
@@ -363,6 +397,8 @@ private:
     ShotShape m_shape;
     Report m_report;
     Band m_whole;  // the kept shot, when it fits in memory
+    // Streaming: 1 for each sample whose row (over frames) the outlier cleaning changed.
+    std::vector<std::uint8_t> m_cleaned_samples;
     double m_solve_seconds = 0;
     int m_filter_modes = 0;  // modes the mode filter surveyed
 };

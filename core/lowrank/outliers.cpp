@@ -30,7 +30,7 @@ struct RowScratch {
 };
 
 OutlierCounts clean_row(const MutableBandView& band, std::int64_t i, const OutlierOptions& options,
-                        RowScratch& scratch)
+                        RowScratch& scratch, bool* changed_out = nullptr)
 {
     OutlierCounts counts;
     const int frames = band.frames;
@@ -77,6 +77,8 @@ OutlierCounts clean_row(const MutableBandView& band, std::int64_t i, const Outli
             changed = true;
         }
     }
+    if (changed_out)
+        *changed_out = changed;
     if (changed)
         for (int t = 0; t < frames; ++t)
             band.at(i, t) = static_cast<float>(scratch.row[static_cast<std::size_t>(t)]);
@@ -85,7 +87,7 @@ OutlierCounts clean_row(const MutableBandView& band, std::int64_t i, const Outli
 
 } // namespace
 
-OutlierCounts clean_outliers(MutableBandView band, const OutlierOptions& options)
+OutlierCounts clean_outliers(MutableBandView band, const OutlierOptions& options, std::uint8_t* changed_rows)
 {
     if (band.rows <= 0 || band.frames <= 0)
         return {};
@@ -97,9 +99,12 @@ OutlierCounts clean_outliers(MutableBandView band, const OutlierOptions& options
         scratch.sorted.resize(static_cast<std::size_t>(band.frames));
         OutlierCounts& tile_counts = per_tile[static_cast<std::size_t>(row0 / kTileRows)];
         for (std::int64_t i = row0; i < row0 + count; ++i) {
-            const OutlierCounts row_counts = clean_row(band, i, options, scratch);
+            bool changed = false;
+            const OutlierCounts row_counts = clean_row(band, i, options, scratch, &changed);
             tile_counts.non_finite += row_counts.non_finite;
             tile_counts.fireflies += row_counts.fireflies;
+            if (changed_rows)
+                changed_rows[i] = changed ? 1 : 0;
         }
     });
     OutlierCounts total;
@@ -108,6 +113,24 @@ OutlierCounts clean_outliers(MutableBandView band, const OutlierOptions& options
         total.fireflies += counts.fireflies;
     }
     return total;
+}
+
+void clean_marked_outliers(MutableBandView band, const OutlierOptions& options, const std::uint8_t* changed_rows)
+{
+    if (band.rows <= 0 || band.frames <= 0)
+        return;
+    for_each_tile(band.rows, [&](std::int64_t row0, std::int64_t count) {
+        RowScratch scratch;
+        for (std::int64_t i = row0; i < row0 + count; ++i) {
+            if (!changed_rows[i])
+                continue;
+            if (scratch.row.empty()) {
+                scratch.row.resize(static_cast<std::size_t>(band.frames));
+                scratch.sorted.resize(static_cast<std::size_t>(band.frames));
+            }
+            clean_row(band, i, options, scratch);
+        }
+    });
 }
 
 } // namespace modestack::lowrank

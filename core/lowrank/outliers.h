@@ -38,7 +38,15 @@ struct OutlierOptions {
 /// is the same for any thread count): (a) each non-finite sample becomes the median
 /// of the row's finite samples (0 if none); (b) each sample above the threshold is
 /// clamped to it and the removed excess is added evenly to all F samples of the row.
-/// Rows with nothing to change are left bit-exactly as they were.
-OutlierCounts clean_outliers(MutableBandView band, const OutlierOptions& options = {});
+/// Rows with nothing to change are left bit-exactly as they were. When
+/// `changed_rows` is given (band.rows entries), it receives 1 for each row that
+/// was changed and 0 for the others.
+OutlierCounts clean_outliers(MutableBandView band, const OutlierOptions& options = {},
+                             std::uint8_t* changed_rows = nullptr);
+
+/// Cleans again, after a fresh read of the same samples, only the rows that
+/// `changed_rows` marks (as clean_outliers filled it): the result is the same as
+/// clean_outliers' at a fraction of the cost, since most rows have nothing to change.
+void clean_marked_outliers(MutableBandView band, const OutlierOptions& options, const std::uint8_t* changed_rows);
 
 } // namespace modestack::lowrank

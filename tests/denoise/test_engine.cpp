@@ -86,19 +86,30 @@ TEST_CASE("engine: streamed and kept shots, gram and rsvd, 1 and 2 threads give 
         arena.execute([&] { report = run_denoise(shot, sink, settings, Progress::silent()); });
         return std::make_pair(report, sink);
     };
-    auto [kept_report, kept] = run(std::int64_t(1) << 30, Solver::Gram, 2);
-    auto [streamed_report, streamed] = run(2 << 20, Solver::Gram, 2);
-    auto [single_report, single] = run(2 << 20, Solver::Gram, 1);
+    // Budgets for this shot (0.8 MB of input): everything at once; the shot kept
+    // but pass 2 in windows of 16 rows; streamed in bands of 16 rows.
+    const std::int64_t whole = std::int64_t(1) << 30, windows = 1'900'000, bands = 1'500'000;
+    auto [kept_report, kept] = run(whole, Solver::Gram, 2);
+    auto [windowed_report, windowed] = run(windows, Solver::Gram, 2);
+    auto [streamed_report, streamed] = run(bands, Solver::Gram, 2);
+    auto [single_report, single] = run(bands, Solver::Gram, 1);
     CHECK(kept_report.plan.in_memory);
+    CHECK(kept_report.plan.band_rows == 70);
+    CHECK(windowed_report.plan.in_memory);
+    CHECK(windowed_report.plan.band_rows < 70);
+    CHECK(windowed_report.passes == 1);
     CHECK_FALSE(streamed_report.plan.in_memory);
     CHECK(streamed_report.plan.band_rows < 70);
     CHECK(streamed_report.passes == 2);
+    CHECK(kept.rebuilt == windowed.rebuilt);
+    CHECK(kept.sigma == windowed.sigma);
     CHECK(kept.rebuilt == streamed.rebuilt);
     CHECK(kept.sigma == streamed.sigma);
     CHECK(streamed.rebuilt == single.rebuilt);
+    CHECK(kept_report.outliers.fireflies == streamed_report.outliers.fireflies);
 
-    auto [rsvd_kept_report, rsvd_kept] = run(std::int64_t(1) << 30, Solver::RandomizedSvd, 2);
-    auto [rsvd_streamed_report, rsvd_streamed] = run(2 << 20, Solver::RandomizedSvd, 1);
+    auto [rsvd_kept_report, rsvd_kept] = run(whole, Solver::RandomizedSvd, 2);
+    auto [rsvd_streamed_report, rsvd_streamed] = run(bands, Solver::RandomizedSvd, 1);
     CHECK(rsvd_kept_report.solver == "rsvd");
     CHECK(rsvd_streamed_report.passes > 2);
     CHECK(rsvd_kept.rebuilt == rsvd_streamed.rebuilt);

@@ -221,10 +221,17 @@ TEST_CASE("mode filter: streamed and kept shots, 1 and 2 threads give the same b
         arena.execute([&] { report = run_denoise(shot, sink, settings, Progress::silent()); });
         return std::make_pair(report, sink);
     };
-    auto [kept_report, kept] = run(std::int64_t(1) << 30, 2);
-    auto [streamed_report, streamed] = run(std::int64_t(2) << 20, 2);
-    auto [single_report, single] = run(std::int64_t(2) << 20, 1);
+    // Budgets: everything at once; the shot kept but pass 2 in windows; streamed.
+    const std::int64_t whole = std::int64_t(1) << 30, windows = 2'200'000, bands = 1'880'000;
+    auto [kept_report, kept] = run(whole, 2);
+    auto [windowed_report, windowed] = run(windows, 2);
+    auto [streamed_report, streamed] = run(bands, 2);
+    auto [single_report, single] = run(bands, 1);
     CHECK(kept_report.plan.in_memory);
+    CHECK(windowed_report.plan.in_memory);
+    CHECK(windowed_report.plan.band_rows < 70);
+    CHECK(kept.rebuilt == windowed.rebuilt);
+    CHECK(kept.sigma == windowed.sigma);
     CHECK_FALSE(streamed_report.plan.in_memory);
     CHECK(streamed_report.plan.band_rows < 70);
     CHECK(streamed_report.passes == 3);

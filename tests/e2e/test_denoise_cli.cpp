@@ -182,10 +182,11 @@ TEST_CASE("denoise output pixels are identical for --threads 1 and 2 and for str
     REQUIRE(run_modestack("denoise " + input + "--threads 2 -o " + dir.file("b/d.####.exr")).exit_code == 0);
     // Streaming: the mode filter's halo (11 rows each side) makes a minimal band taller than this
     // 36-row shot, so compare streamed and kept without it (tests/denoise covers the filter).
-    // 40 px * 3 channels * 4 bytes * (4 buffers * 24 frames + modes) = 57 KB per row: 1500K holds a
-    // band of 16 rows plus 2 * 3 halo rows, so the shot is streamed.
+    // Per row, 40 px * 3 channels * 4 bytes * 24 frames = 11.5 KB of input and, with pass 2's
+    // buffers (3 per frame + 23 modes), 57 KB in all: 1350K holds a streamed band of 16 rows plus
+    // 2 * 3 halo rows, but not the kept shot (36 rows of input) with a pass-2 window of 16 + 6 rows.
     REQUIRE(run_modestack("denoise " + input + "--no-mode-filter -o " + dir.file("c/d.####.exr")).exit_code == 0);
-    auto streamed = run_modestack("denoise " + input + "--no-mode-filter --max-memory 1500K --json " +
+    auto streamed = run_modestack("denoise " + input + "--no-mode-filter --max-memory 1350K --json " +
                                   dir.file("d.json") + " -o " + dir.file("d/d.####.exr"));
     REQUIRE_MESSAGE(streamed.exit_code == 0, streamed.err);
     auto json = nlohmann::json::parse(slurp(dir.file("d.json")));
