@@ -198,6 +198,7 @@ int run_denoise(const DenoiseOptions& options)
 
     SequenceSource source(reader);
     SequenceSink sink(reader, paths, options.save_modes);
+    sink.reuse_rows_of(source);
     sink.set_attributes({
         io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
         io::HeaderAttribute::of_text("modestack:command", command_line()),

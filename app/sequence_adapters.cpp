@@ -11,9 +11,41 @@ denoise::ShotShape SequenceSource::shape() const
     return {m_reader.frame_count(), m_reader.width(), m_reader.height(), m_reader.selected_channel_count()};
 }
 
+SequenceSource::SequenceSource(const io::SequenceReader& reader)
+    : m_reader(reader), m_native(static_cast<size_t>(reader.frame_count()))
+{
+}
+
 void SequenceSource::read_rows(int frame_index, int row_begin, int row_end, float* destination)
 {
-    m_reader.read_selected(frame_index, row_begin, row_end, destination);
+    if (!m_keeping || !m_reader.has_unselected_channels(frame_index)) {
+        m_reader.read_selected(frame_index, row_begin, row_end, destination);
+        return;
+    }
+    NativeRows& native = m_native[static_cast<size_t>(frame_index)];
+    m_reader.read_native(frame_index, row_begin, row_end, native.bytes);
+    native.row_begin = row_begin;
+    native.row_end = row_end;
+    m_reader.selected_from_native(frame_index, native.bytes.data(),
+                                  static_cast<size_t>(m_reader.width()) * (row_end - row_begin), destination);
+}
+
+std::int64_t SequenceSource::band_bytes_per_row() const
+{
+    std::int64_t bytes = 0;
+    for (int frame = 0; frame < m_reader.frame_count(); ++frame)
+        if (m_reader.has_unselected_channels(frame))
+            bytes += static_cast<std::int64_t>(m_reader.native_pixel_bytes(frame)) * m_reader.width();
+    return bytes;
+}
+
+const unsigned char* SequenceSource::native_rows(int frame_index, int row_begin, int row_end) const
+{
+    const NativeRows& native = m_native[static_cast<size_t>(frame_index)];
+    if (!m_keeping || native.bytes.empty() || row_begin < native.row_begin || row_end > native.row_end)
+        return nullptr;
+    return native.bytes.data() +
+           m_reader.native_pixel_bytes(frame_index) * m_reader.width() * static_cast<size_t>(row_begin - native.row_begin);
 }
 
 SequenceSink::SequenceSink(const io::SequenceReader& reader, std::vector<std::string> outputs,
@@ -30,6 +62,8 @@ void SequenceSink::begin(const denoise::RebuildStart& start)
     attributes.push_back(io::HeaderAttribute::of_integer("modestack:rank", start.rank));
     attributes.push_back(io::HeaderAttribute::of_text("modestack:rank_rule", start.rank_rule));
     attributes.push_back(io::HeaderAttribute::of_text("modestack:solver", start.solver));
+    if (m_source)  // pass 2's reads start now: keep what they decode for the copies
+        m_source->keep_native_rows();
     m_outputs.clear();
     for (size_t frame = 0; frame < m_paths.size(); ++frame)
         m_outputs.push_back(m_paths[frame].empty() ? nullptr
@@ -52,10 +86,15 @@ void SequenceSink::write_rows(int frame_index, int row_begin, int row_end, const
     io::FrameOutput* output = m_outputs.at(frame_index).get();
     if (!output)
         return;
-    thread_local std::vector<unsigned char> native;
-    native.clear();
-    if (output->needs_input_rows())  // pass-through channels to copy
-        m_reader.read_native(frame_index, row_begin, row_end, native);
+    const unsigned char* native = nullptr;
+    if (output->needs_input_rows()) {  // pass-through channels to copy
+        native = m_source ? m_source->native_rows(frame_index, row_begin, row_end) : nullptr;
+        if (!native) {  // a kept shot: pass 2 did not read the file
+            thread_local std::vector<unsigned char> decoded;
+            m_reader.read_native(frame_index, row_begin, row_end, decoded);
+            native = decoded.data();
+        }
+    }
     output->write_replaced_rows(row_begin, row_end, native, rebuilt, sigma);
 }
 

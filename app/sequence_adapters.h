@@ -8,21 +8,39 @@
 #include "io/frame_output.h"
 #include "io/sequence_reader.h"
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
 
 namespace modestack::app {
 
-/// FrameSource over an io::SequenceReader.
+/// FrameSource over an io::SequenceReader. Once the sink starts writing, a
+/// frame with pass-through channels is decoded once per band: the source keeps
+/// its native rows, converts the selected channels from them, and the sink copies
+/// the rest from the same rows instead of decoding the file a second time.
 class SequenceSource : public denoise::FrameSource {
 public:
-    explicit SequenceSource(const io::SequenceReader& reader) : m_reader(reader) {}
+    explicit SequenceSource(const io::SequenceReader& reader);
     denoise::ShotShape shape() const override;
     void read_rows(int frame_index, int row_begin, int row_end, float* destination) override;
+    std::int64_t band_bytes_per_row() const override;
+
+    /// Starts keeping the native rows of each read of a frame with pass-through channels.
+    void keep_native_rows() { m_keeping = true; }
+    /// The kept native rows [row_begin, row_end) of frame `frame_index`, or
+    /// nullptr when the last read of that frame did not cover them.
+    const unsigned char* native_rows(int frame_index, int row_begin, int row_end) const;
 
 private:
+    struct NativeRows {
+        int row_begin = 0;
+        int row_end = 0;
+        std::vector<unsigned char> bytes;
+    };
     const io::SequenceReader& m_reader;
+    bool m_keeping = false;
+    std::vector<NativeRows> m_native;  // per frame
 };
 
 /// FrameSink writing one output file per input frame.
@@ -32,6 +50,9 @@ public:
     /// `modes_directory` ("" = none) receives mode.NN.exr per spatial mode.
     SequenceSink(const io::SequenceReader& reader, std::vector<std::string> outputs, std::string modes_directory);
 
+    /// Takes pass-through channels from the rows `source` decoded for the same
+    /// band (see SequenceSource) instead of decoding them again.
+    void reuse_rows_of(SequenceSource& source) { m_source = &source; }
     /// Attributes every output header gets (provenance), besides rank, rule and solver.
     void set_attributes(std::vector<io::HeaderAttribute> attributes) { m_attributes = std::move(attributes); }
     /// Opens every output under its temporary name.
@@ -45,6 +66,7 @@ public:
 
 private:
     const io::SequenceReader& m_reader;
+    SequenceSource* m_source = nullptr;
     std::vector<std::string> m_paths;
     std::string m_modes_directory;
     std::vector<std::string> m_sigma_names;

@@ -84,7 +84,6 @@ struct FrameOutput::State {
     const detail::OpenFrame* source = nullptr;  ///< the copied input frame, if any
     std::vector<OIIO::TypeDesc> extra_types;
     size_t output_pixel_bytes = 0;
-    std::vector<unsigned char> scratch;
 };
 
 FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, int frame_index,
@@ -166,20 +165,32 @@ void FrameOutput::write_replaced_rows(int row_begin, int row_end, const std::vec
                                       const float* replaced, const float* extra)
 {
     const detail::OpenFrame& source = *m_state->source;
+    size_t pixels = static_cast<size_t>(source.spec.width) * (row_end - row_begin);
+    if (needs_input_rows() && input_native.size() != pixels * source.native_pixel_bytes)
+        throw internal_error("native row buffer has the wrong size");
+    write_replaced_rows(row_begin, row_end, input_native.empty() ? nullptr : input_native.data(), replaced, extra);
+}
+
+void FrameOutput::write_replaced_rows(int row_begin, int row_end, const unsigned char* input_native,
+                                      const float* replaced, const float* extra)
+{
+    const detail::OpenFrame& source = *m_state->source;
     const OIIO::ImageSpec& input_spec = source.spec;
     size_t pixels = static_cast<size_t>(input_spec.width) * (row_end - row_begin);
     size_t in_bytes = source.native_pixel_bytes, out_bytes = m_state->output_pixel_bytes;
     size_t replaced_count = source.selected.size(), extra_count = m_state->extra_types.size();
     // Without pass-through channels every input byte is overwritten: no input rows needed.
     const bool copy_input = needs_input_rows();
-    if (copy_input && input_native.size() != pixels * in_bytes)
-        throw internal_error("native row buffer has the wrong size");
-    m_state->scratch.resize(pixels * out_bytes);
-    unsigned char* out = m_state->scratch.data();
+    if (copy_input && !input_native)
+        throw internal_error("native rows missing for a frame with pass-through channels");
+    // Per thread, not per output: a shot has hundreds of outputs open at once.
+    thread_local std::vector<unsigned char> scratch;
+    scratch.resize(pixels * out_bytes);
+    unsigned char* out = scratch.data();
     for (size_t p = 0; p < pixels; ++p) {
         unsigned char* pixel = out + p * out_bytes;
         if (copy_input)
-            std::memcpy(pixel, input_native.data() + p * in_bytes, in_bytes);
+            std::memcpy(pixel, input_native + p * in_bytes, in_bytes);
         for (size_t k = 0; k < replaced_count; ++k) {
             int channel = source.selected[k];
             store_value(replaced[p * replaced_count + k], input_spec.channelformat(channel),

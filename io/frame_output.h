@@ -64,6 +64,9 @@ public:
     /// needs_input_rows() is false.
     void write_replaced_rows(int row_begin, int row_end, const std::vector<unsigned char>& input_native,
                              const float* replaced, const float* extra);
+    /// The same with the native rows as a pointer (nullptr when needs_input_rows() is false).
+    void write_replaced_rows(int row_begin, int row_end, const unsigned char* input_native, const float* replaced,
+                             const float* extra);
     /// Whether a copied frame has channels that are passed through (not replaced),
     /// i.e. whether write_replaced_rows needs the input's native rows.
     bool needs_input_rows() const;

@@ -4,6 +4,7 @@
 #include "io/detail/open_frame.h"
 #include "io/frame_header.h"
 
+#include <Imath/half.h>
 #include <OpenImageIO/filesystem.h>
 #include <fmt/format.h>
 
@@ -156,6 +157,43 @@ void SequenceReader::read_native(int frame_index, int row_begin, int row_end,
     const detail::OpenFrame& frame = *m_frames.at(frame_index);
     destination.resize(frame.native_pixel_bytes * m_width * (row_end - row_begin));
     read_rows(frame, row_begin, row_end, 0, frame.spec.nchannels, OIIO::TypeUnknown, destination.data());
+}
+
+void SequenceReader::selected_from_native(int frame_index, const unsigned char* native, std::size_t pixels,
+                                          float* destination) const
+{
+    const detail::OpenFrame& frame = *m_frames.at(frame_index);
+    const std::size_t count = frame.selected.size();
+    for (std::size_t k = 0; k < count; ++k) {
+        const int channel = frame.selected[k];
+        const OIIO::TypeDesc type = frame.spec.channelformat(channel);
+        const unsigned char* source = native + frame.byte_offset[channel];
+        const std::size_t stride = frame.native_pixel_bytes;
+        if (type == OIIO::TypeHalf) {  // EXR's usual type: a table lookup, no dispatch per value
+            for (std::size_t p = 0; p < pixels; ++p) {
+                Imath::half value;
+                std::memcpy(&value, source + p * stride, sizeof value);
+                destination[p * count + k] = static_cast<float>(value);
+            }
+        } else if (type == OIIO::TypeFloat) {
+            for (std::size_t p = 0; p < pixels; ++p)
+                std::memcpy(destination + p * count + k, source + p * stride, sizeof(float));
+        } else {
+            for (std::size_t p = 0; p < pixels; ++p)
+                OIIO::convert_pixel_values(type, source + p * stride, OIIO::TypeFloat, destination + p * count + k);
+        }
+    }
+}
+
+bool SequenceReader::has_unselected_channels(int frame_index) const
+{
+    const detail::OpenFrame& frame = *m_frames.at(frame_index);
+    return static_cast<int>(frame.selected.size()) < frame.spec.nchannels;
+}
+
+std::size_t SequenceReader::native_pixel_bytes(int frame_index) const
+{
+    return m_frames.at(frame_index)->native_pixel_bytes;
 }
 
 }  // namespace modestack::io

@@ -48,6 +48,18 @@ public:
     /// packed per pixel (as OIIO's TypeUnknown layout), resizing `destination`.
     void read_native(int frame_index, int row_begin, int row_end, std::vector<unsigned char>& destination) const;
 
+    /// Converts the selected channels of `pixels` pixels of native rows (as
+    /// read_native gives them for frame `frame_index`) to float, interleaved like
+    /// read_selected's: the same values read_selected would read, without decoding
+    /// the file again.
+    void selected_from_native(int frame_index, const unsigned char* native, std::size_t pixels,
+                              float* destination) const;
+    /// Whether frame `frame_index` has channels that are not selected (an output
+    /// copies them through from the native rows).
+    bool has_unselected_channels(int frame_index) const;
+    /// Bytes of one pixel of frame `frame_index` in native types, all channels.
+    std::size_t native_pixel_bytes(int frame_index) const;
+
     /// The opened frame, for io/'s writer.
     const detail::OpenFrame& frame(int frame_index) const { return *m_frames[frame_index]; }
 

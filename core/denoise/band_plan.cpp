@@ -26,7 +26,8 @@ std::int64_t work_bytes_per_row(const ShotShape& shape, int modes)
            (3 * static_cast<std::int64_t>(shape.frames) + modes);
 }
 
-BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int halo_rows, int modes)
+BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int halo_rows, int modes,
+                    std::int64_t source_row_bytes)
 {
     BandPlan plan;
     plan.halo_rows = halo_rows;
@@ -41,8 +42,8 @@ BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int h
         plan.estimated_bytes = kept + work_row * (plan.band_rows + 2 * halo_rows);
         return plan;
     }
-    // Streaming: a read band and pass 2's buffers per row, and the outlier marks.
-    const std::int64_t per_row = input_row + work_row;
+    // Streaming: a read band, pass 2's buffers and the source's rows, and the outlier marks.
+    const std::int64_t per_row = input_row + work_row + source_row_bytes;
     const std::int64_t marks = samples_per_row(shape) * shape.height;
     std::int64_t rows = (max_memory_bytes - marks) / per_row - 2 * halo_rows;
     rows = rows / kChunkRows * kChunkRows;

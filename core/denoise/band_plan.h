@@ -32,8 +32,11 @@ struct BandPlan {
 /// Plans for `max_memory_bytes` of working memory. `halo_rows` is what pass 2
 /// needs around a band (spatial pooling of sigma); `modes` counts the extra
 /// per-sample images pass 2 keeps besides the per-frame ones (coefficients,
-/// filter scratch). Throws modestack::Error (usage) when even a minimal band does not fit.
-BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int halo_rows, int modes);
+/// filter scratch), `source_row_bytes` what the source keeps per row of a
+/// streamed band (FrameSource::band_bytes_per_row). Throws modestack::Error
+/// (usage) when even a minimal band does not fit.
+BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int halo_rows, int modes,
+                    std::int64_t source_row_bytes = 0);
 
 /// Bytes of one image row of the input of every frame (a read band or the kept shot).
 std::int64_t input_bytes_per_row(const ShotShape& shape);

@@ -53,7 +53,8 @@ public:
             // the guide with its noise (a few images).
             plan_modes += std::max(m_settings.mode_filter.max_modes, largest_rank) + m_shape.frames + 6;
         }
-        m_report.plan = plan_bands(m_shape, m_settings.max_memory_bytes, halo_rows, plan_modes);
+        m_report.plan =
+            plan_bands(m_shape, m_settings.max_memory_bytes, halo_rows, plan_modes, m_source.band_bytes_per_row());
         Solver solver = m_settings.solver;
         if (solver == Solver::Auto)
             solver = m_shape.frames >= m_settings.randomized_from_frames ? Solver::RandomizedSvd : Solver::Gram;

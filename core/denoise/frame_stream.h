@@ -4,6 +4,7 @@
 // SequenceReader and FrameOutput to them; tests use plain memory.
 #pragma once
 
+#include <cstdint>
 #include <string>
 
 namespace modestack::denoise {
@@ -24,6 +25,9 @@ public:
     /// Reads rows [row_begin, row_end) of frame `frame_index` as float,
     /// interleaved [row][x][channel]. Called concurrently for different frames.
     virtual void read_rows(int frame_index, int row_begin, int row_end, float* destination) = 0;
+    /// Bytes the source itself keeps per image row of a streamed band, all frames
+    /// together (e.g. decoded rows it hands to the sink), for the memory plan.
+    virtual std::int64_t band_bytes_per_row() const { return 0; }
 };
 
 /// What is decided before the first rebuilt row: outputs record it.

@@ -176,27 +176,38 @@ TEST_CASE("denoise --no-mode-filter: press picks the true rank 2 and sigma match
 TEST_CASE("denoise output pixels are identical for --threads 1 and 2 and for streamed and kept shots")
 {
     TempDir dir;
-    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    // 96 rows, so that a budget can stream the shot but not keep it (see below).
+    testkit::ExrLayout tall = layout();
+    tall.height = 96;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), tall, noisy_value);
     std::string input = dir.file("in.####.exr") + " --layer DiffInd -q ";
     REQUIRE(run_modestack("denoise " + input + "--threads 1 -o " + dir.file("a/d.####.exr")).exit_code == 0);
     REQUIRE(run_modestack("denoise " + input + "--threads 2 -o " + dir.file("b/d.####.exr")).exit_code == 0);
-    // Streaming: the mode filter's halo (11 rows each side) makes a minimal band taller than this
-    // 36-row shot, so compare streamed and kept without it (tests/denoise covers the filter).
-    // Per row, 40 px * 3 channels * 4 bytes * 24 frames = 11.5 KB of input and, with pass 2's
-    // buffers (3 per frame + 23 modes), 57 KB in all: 1350K holds a streamed band of 16 rows plus
-    // 2 * 3 halo rows, but not the kept shot (36 rows of input) with a pass-2 window of 16 + 6 rows.
+    // Streaming: the mode filter's halo (11 rows each side) makes a minimal band taller than
+    // the budget below allows, so compare streamed and kept without it (tests/denoise covers
+    // the filter). Per row of all 24 frames, 40 px: 11.5 KB of selected input, 45.6 KB of pass
+    // 2's buffers (3 per frame + 23 modes) and 23 KB of native rows (24-byte pixels) the source
+    // keeps for the pass-through copy. 1900000 bytes hold a streamed band of 16 + 2 * 3 halo
+    // rows, but not the kept shot (96 rows of input) with a pass-2 window of 16 + 6 rows.
     REQUIRE(run_modestack("denoise " + input + "--no-mode-filter -o " + dir.file("c/d.####.exr")).exit_code == 0);
-    auto streamed = run_modestack("denoise " + input + "--no-mode-filter --max-memory 1350K --json " +
+    auto streamed = run_modestack("denoise " + input + "--no-mode-filter --max-memory 1900000 --json " +
                                   dir.file("d.json") + " -o " + dir.file("d/d.####.exr"));
     REQUIRE_MESSAGE(streamed.exit_code == 0, streamed.err);
     auto json = nlohmann::json::parse(slurp(dir.file("d.json")));
     CHECK(json["in_memory"] == false);
     CHECK(json["passes"] == 2);
+    CHECK(json["band_rows"] < 96);
     for (int frame : {1, 13, 24}) {
         char name[64];
         std::snprintf(name, sizeof name, "/d.%04d.exr", frame);
         CHECK(testkit::read_native(dir.path() + "/a" + name) == testkit::read_native(dir.path() + "/b" + name));
         CHECK(testkit::read_native(dir.path() + "/c" + name) == testkit::read_native(dir.path() + "/d" + name));
+        // The pass-through channels come from the rows the source decoded: still the input's.
+        std::vector<std::string> others{"ViewLayer.Combined.R", "ViewLayer.Combined.A", "ViewLayer.Depth.Z"};
+        char input_name[64];
+        std::snprintf(input_name, sizeof input_name, "/in.%04d.exr", frame);
+        CHECK(testkit::read_channels(dir.path() + "/d" + name, others) ==
+              testkit::read_channels(dir.path() + input_name, others));
     }
 }
 

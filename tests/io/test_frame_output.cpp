@@ -70,6 +70,31 @@ TEST_CASE("round trip: replaced channels change, pass-through channels are bit-e
         CHECK(std::memcmp(in.data() + p * 18, out.data() + p * 24, 8) == 0);  // R,G,B,A
 }
 
+TEST_CASE("an output whose channels are all replaced needs no input rows")
+{
+    TempDir dir;
+    testkit::ExrLayout rgb = multilayer();
+    rgb.channel_names = {"R", "G", "B"};
+    rgb.channel_types = {"half", "half", "half"};
+    testkit::write_sequence(dir.file("in.%04d.exr"), {1}, rgb, noise_value);
+    io::SequenceReader reader(io::find_input_sequence(dir.file("in.####.exr")), {});  // the unnamed layer
+    CHECK(reader.selected_channel_count() == 3);
+    {
+        io::FrameOutput output(dir.file("out.0001.exr"), reader, 0, {"sigma.R", "sigma.G", "sigma.B"}, {});
+        CHECK_FALSE(output.needs_input_rows());
+        std::vector<float> replaced(19 * 7 * 3), extra(19 * 7 * 3, 0.25f);
+        for (size_t i = 0; i < replaced.size(); ++i)
+            replaced[i] = 0.5f * static_cast<float>(i % 11);
+        output.write_replaced_rows(0, 7, std::vector<unsigned char>{}, replaced.data(), extra.data());
+        output.commit();
+    }
+    std::vector<float> written = testkit::read_channels(dir.file("out.0001.exr"), {"R", "G", "B"});
+    for (size_t i = 0; i < written.size(); ++i)
+        CHECK(written[i] == 0.5f * static_cast<float>(i % 11));  // exact in half
+    for (float value : testkit::read_channels(dir.file("out.0001.exr"), {"sigma.G"}))
+        CHECK(value == 0.25f);
+}
+
 TEST_CASE("atomic write: nothing under the final name until commit, no temporary left after a failure")
 {
     TempDir dir;

@@ -61,6 +61,29 @@ TEST_CASE("scattered channels (R and B of one layer, Z of another) are picked in
     CHECK(band == testkit::read_channels(dir.file("s.0001.exr"), reader.selected_channel_names()));
 }
 
+TEST_CASE("selected channels converted from native rows equal a read of the selected channels")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("s.%04d.exr"), {1, 2}, cycles_layout(31, 9, 0), pattern_value);
+    // Half (DiffInd, Combined) and float (Depth.Z) channels, scattered in the file; the
+    // Combined layer's RGB, not its alpha.
+    io::SequenceReader reader(io::find_input_sequence(dir.file("s.####.exr")), {"DiffInd", "Depth", "Combined"});
+    CHECK(reader.selected_channel_count() == 7);
+    CHECK(reader.has_unselected_channels(0));
+    io::SequenceReader some(io::find_input_sequence(dir.file("s.####.exr")), {"DiffInd"});
+    CHECK(some.has_unselected_channels(1));
+    CHECK(some.native_pixel_bytes(1) == 7 * 2 + 4);
+    for (const io::SequenceReader* selection : {&reader, &some}) {
+        const size_t count = static_cast<size_t>(selection->selected_channel_count());
+        std::vector<float> selected(31 * 5 * count), converted(selected.size(), -1.0f);
+        selection->read_selected(1, 3, 8, selected.data());
+        std::vector<unsigned char> native;
+        selection->read_native(1, 3, 8, native);
+        selection->selected_from_native(1, native.data(), 31 * 5, converted.data());
+        CHECK(converted == selected);
+    }
+}
+
 TEST_CASE("frames of a different size, a missing channel or a truncated file are refused up front")
 {
     TempDir dir;
