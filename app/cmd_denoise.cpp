@@ -1,7 +1,10 @@
 // `modestack denoise SEQ -o SEQ`: the temporal low-rank denoiser on an EXR
 // sequence. Validates every input and output before any work, runs the
 // streaming engine (core/denoise), writes each output frame atomically with
-// its sigma channels and provenance, and a JSON summary when asked.
+// its sigma channels and provenance, and a JSON summary when asked. Inputs
+// that are not scene-linear are converted for the engine and back on output
+// (app/color_adapters.h).
+#include "app/color_adapters.h"
 #include "app/command.h"
 #include "app/memory_budget.h"
 #include "app/option_values.h"
@@ -42,6 +45,8 @@ struct DenoiseOptions {
     int mode_filter_modes = 16;
     std::vector<double> mode_filter_widths{0.75, 1.0, 1.5, 2.0, 3.0};
     bool skip_existing = false;
+    std::string colorspace;
+    std::string ocio_config;
     CommonOptions common;
 };
 
@@ -181,6 +186,7 @@ int run_denoise(const DenoiseOptions& options)
     if (!options.save_modes.empty())
         io::check_outputs({(std::filesystem::path(options.save_modes) / "mode.01.exr").string()}, input.files);
     io::SequenceReader reader(input, options.layers);
+    DenoiseColor color = choose_denoise_color(options.ocio_config, options.colorspace, reader);
 
     std::vector<std::string> paths = output.files;
     int frames_written = 0;
@@ -199,13 +205,16 @@ int run_denoise(const DenoiseOptions& options)
     SequenceSource source(reader);
     SequenceSink sink(reader, paths, options.save_modes);
     sink.reuse_rows_of(source);
-    sink.set_attributes({
+    std::vector<io::HeaderAttribute> attributes{
         io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
         io::HeaderAttribute::of_text("modestack:command", command_line()),
         io::HeaderAttribute::of_text("modestack:input", input.printf_pattern),
         io::HeaderAttribute::of_text("modestack:frames", io::describe_frames(input.frames)),
-    });
-    denoise::Report report = denoise::run_denoise(source, sink, settings, context.progress());
+    };
+    append_color_attributes(attributes, color);
+    sink.set_attributes(std::move(attributes));
+    ColorStream stream(color, source, sink);
+    denoise::Report report = denoise::run_denoise(stream.source(), stream.sink(), settings, context.progress());
     sink.commit();
     if (report.outliers.non_finite > 0)
         context.progress().warn(fmt::format("{} NaN/Inf values in {} were replaced by their pixel's temporal median",
@@ -230,8 +239,11 @@ int run_denoise(const DenoiseOptions& options)
         }
         io::write_text_file((std::filesystem::path(options.save_modes) / "temporal_modes.csv").string(), csv);
     }
-    if (!options.json_path.empty())
-        io::write_text_file(options.json_path, summary_json(options, reader, report, seconds, frames_written).dump(2) + "\n");
+    if (!options.json_path.empty()) {
+        nlohmann::ordered_json json = summary_json(options, reader, report, seconds, frames_written);
+        json["color"] = color_json(color);
+        io::write_text_file(options.json_path, json.dump(2) + "\n");
+    }
     if (!options.common.quiet)
         std::fprintf(stderr, "denoised %d of %d frames with N = %d modes (%s rule, %s solver) in %.2f s\n",
                      frames_written, report.shape.frames, report.rank.rank, report.rank.rule.c_str(),
@@ -288,6 +300,14 @@ Subcommand add_denoise_command(CLI::App& parent)
         ->check(CLI::Range(0.1, 16.0));
     command->add_flag("--skip-existing", options->skip_existing,
                       "Do not rewrite output frames that exist already (farm re-runs)");
+    command->add_option("--colorspace", options->colorspace,
+                        "OCIO colour space of the input (name, alias or role), instead of what the files record "
+                        "(EXR: scene-linear unless their chromaticities say otherwise). A non-linear space is "
+                        "denoised in the config's scene_linear space and written back in its own; sigma stays in "
+                        "scene-linear units");
+    command->add_option("--ocio-config", options->ocio_config,
+                        "OpenColorIO config file; wins over $OCIO, which wins over the config shipped with "
+                        "modestack");
     add_common_options(*command, options->common);
     return {command, [options] { return run_denoise(*options); }};
 }

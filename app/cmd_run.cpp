@@ -6,11 +6,13 @@
 // this process, not spawned), so `run` and the stages by hand give the same
 // files. With --reference-spp it also renders a reference and measures relMSE,
 // equivalent spp and the equal-quality speed-up as DESIGN.md defines them.
+// The contact sheet goes through the OCIO config's display/view.
 #include "app/command.h"
 #include "app/run_context.h"
 #include "core/common/error.h"
 #include "core/refine/equal_quality.h"
 #include "core/scene/builtin_scenes.h"
+#include "io/color_management.h"
 #include "io/contact_sheet.h"
 #include "io/frame_output.h"
 #include "io/sequence.h"
@@ -43,6 +45,9 @@ struct RunOptions {
     double threshold = -1; ///< > 0: use it instead of the budget
     int reference_spp = 0;
     double exposure = 0.0;
+    std::string display;
+    std::string view;
+    std::string ocio_config;
     CommonOptions common;
 };
 
@@ -173,6 +178,9 @@ int run_run(const RunOptions& options)
     if (frames.size() < 3)
         throw usage_error("--frames: run denoises a shot, give at least 3 frames");
     const std::string frame_range = io::describe_frames(frames);
+    // Checked before any work: a bad config, display or view fails at once.
+    const io::ColorConfig color_config(io::locate_color_config(options.ocio_config));
+    const io::DisplayConverter display(color_config, options.display, options.view, options.exposure);
     const stdfs::path directory(options.directory);
     const stdfs::path json_directory = directory / "json";
     stdfs::create_directories(json_directory);
@@ -200,8 +208,9 @@ int run_run(const RunOptions& options)
     seconds["render"] = seconds_since(stage_start);
 
     stage_start = std::chrono::steady_clock::now();
+    // The renderer writes scene-linear Rec.709, which the denoiser reads as such.
     run_stage({"denoise", noisy, "--frames", frame_range, "--layer", "DiffInd", "-o", denoised, "--json",
-               json_file("denoise.json")},
+               json_file("denoise.json"), "--ocio-config", color_config.path()},
               options.common);
     seconds["denoise"] = seconds_since(stage_start);
 
@@ -332,7 +341,7 @@ int run_run(const RunOptions& options)
     std::vector<io::ContactSheetCell> cells;
     for (const auto& image : sheet_images)
         cells.push_back({noisy_passes.width(), noisy_passes.height(), image.data()});
-    io::write_contact_sheet((directory / "contact_sheet.png").string(), columns, cells, options.exposure);
+    io::write_contact_sheet((directory / "contact_sheet.png").string(), columns, cells, display);
     summary["contact_sheet"] = {{"frames",
                                  [&] {
                                      std::vector<int> shown;
@@ -342,7 +351,12 @@ int run_run(const RunOptions& options)
                                  }()},
                                 {"columns", reference_beauty
                                                 ? Json::array({"noisy", "denoised", "refined", "reference"})
-                                                : Json::array({"noisy", "denoised", "refined"})}};
+                                                : Json::array({"noisy", "denoised", "refined"})},
+                                {"ocio_config", color_config.path()},
+                                {"ocio_config_from", io::describe(color_config.source())},
+                                {"display", display.display()},
+                                {"view", display.view()},
+                                {"exposure", options.exposure}};
 
     if (reference_beauty) {
         // Time model t(s) = t0 + k·s per frame from the noisy and reference renders.
@@ -453,7 +467,15 @@ Subcommand add_run_command(CLI::App& parent)
                      "Also render a reference at this spp and measure relMSE, equivalent spp and speed-up "
                      "(0 = no reference)")
         ->check(CLI::NonNegativeNumber);
-    command->add_option("--exposure", options->exposure, "Exposure of the contact sheet, in stops");
+    command->add_option("--exposure", options->exposure,
+                        "Exposure of the contact sheet, in stops (scene-linear, before the display/view)");
+    command->add_option("--display", options->display,
+                        "OCIO display of the contact sheet (default: the config's default display)");
+    command->add_option("--view", options->view,
+                        "OCIO view of the contact sheet (default: the display's default)");
+    command->add_option("--ocio-config", options->ocio_config,
+                        "OpenColorIO config file; wins over $OCIO, which wins over the config shipped with "
+                        "modestack");
     add_common_options(*command, options->common);
     return {command, [options] { return run_run(*options); }};
 }

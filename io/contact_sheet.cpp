@@ -15,19 +15,17 @@
 namespace modestack::io {
 namespace {
 
-std::uint8_t to_srgb_byte(float linear, float scale)
+std::uint8_t to_byte(float encoded)
 {
-    double v = std::clamp(static_cast<double>(linear) * scale, 0.0, 1.0);
-    if (!std::isfinite(v))
-        v = 0.0;
-    double encoded = v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
-    return static_cast<std::uint8_t>(std::lround(encoded * 255.0));
+    if (!std::isfinite(encoded))
+        return 0;
+    return static_cast<std::uint8_t>(std::lround(std::clamp(encoded, 0.0f, 1.0f) * 255.0f));
 }
 
 } // namespace
 
 void write_contact_sheet(const std::string& path, int columns, const std::vector<ContactSheetCell>& cells,
-                         double exposure_stops, int gap)
+                         const DisplayConverter& display, int gap)
 {
     if (cells.empty() || columns < 1)
         throw usage_error("a contact sheet needs at least one image");
@@ -39,15 +37,17 @@ void write_contact_sheet(const std::string& path, int columns, const std::vector
     const int width = columns * cell_width + (columns + 1) * gap;
     const int height = rows * cell_height + (rows + 1) * gap;
     std::vector<std::uint8_t> pixels(static_cast<std::size_t>(width) * height * 3, 24);
-    const float scale = static_cast<float>(std::exp2(exposure_stops));
+    std::vector<float> encoded(static_cast<std::size_t>(cell_width) * cell_height * 3);
     for (std::size_t i = 0; i < cells.size(); ++i) {
+        std::copy(cells[i].rgb, cells[i].rgb + encoded.size(), encoded.begin());
+        display.apply(encoded.data(), encoded.size() / 3);
         int x0 = gap + static_cast<int>(i % columns) * (cell_width + gap);
         int y0 = gap + static_cast<int>(i / columns) * (cell_height + gap);
         for (int y = 0; y < cell_height; ++y)
             for (int x = 0; x < cell_width; ++x)
                 for (int c = 0; c < 3; ++c)
-                    pixels[((static_cast<std::size_t>(y0 + y)) * width + x0 + x) * 3 + c] = to_srgb_byte(
-                        cells[i].rgb[(static_cast<std::size_t>(y) * cell_width + x) * 3 + c], scale);
+                    pixels[((static_cast<std::size_t>(y0 + y)) * width + x0 + x) * 3 + c] =
+                        to_byte(encoded[(static_cast<std::size_t>(y) * cell_width + x) * 3 + c]);
     }
     std::filesystem::path final_path(path);
     std::string temporary = (final_path.parent_path() /
@@ -57,7 +57,11 @@ void write_contact_sheet(const std::string& path, int columns, const std::vector
     if (!output)
         throw internal_error("OpenImageIO has no PNG writer");
     OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("oiio:ColorSpace", "sRGB");
+    spec.attribute("oiio:ColorSpace", display.encoded_color_space());
+    spec.attribute("modestack:display", display.display());
+    spec.attribute("modestack:view", display.view());
+    spec.attribute("modestack:exposure", fmt::format("{} stops", display.exposure_stops()));
+    spec.attribute("modestack:ocio_config", display.config_path());
     if (!output->open(temporary, spec) || !output->write_image(OIIO::TypeDesc::UINT8, pixels.data()) ||
         !output->close()) {
         std::string reason = output->geterror();
