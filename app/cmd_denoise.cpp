@@ -170,6 +170,8 @@ int run_denoise(const DenoiseOptions& options)
     auto start = std::chrono::steady_clock::now();
     denoise::Settings settings = make_settings(options);
     RunContext context(options.common);
+    io::use_single_threaded_exr_files();  // F files open at once, frames read in parallel by us
+    reuse_freed_memory();
 
     io::FrameSequence input = io::find_input_sequence(options.input, options.frames);
     io::FrameSequence output = io::output_sequence(options.output, input.frames);

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <malloc.h>
 #include <unistd.h>
 
 namespace modestack::app {
@@ -36,6 +37,13 @@ std::int64_t automatic_memory_budget()
 std::int64_t parse_memory_budget(const std::string& text, const std::string& option)
 {
     return text == "auto" ? automatic_memory_budget() : parse_memory_size(text, option);
+}
+
+void reuse_freed_memory()
+{
+    constexpr int kLargestReused = 32 << 20;  // glibc ignores larger thresholds
+    mallopt(M_MMAP_THRESHOLD, kLargestReused);
+    mallopt(M_TRIM_THRESHOLD, 2 * kLargestReused);
 }
 
 }  // namespace modestack::app

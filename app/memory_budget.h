@@ -16,4 +16,11 @@ std::int64_t automatic_memory_budget();
 /// "auto" → automatic_memory_budget(); otherwise parse_memory_size(text, option).
 std::int64_t parse_memory_budget(const std::string& text, const std::string& option);
 
+/// Tells the C library to keep freed blocks of up to 32 MiB (glibc's largest
+/// mmap threshold) in its heap for reuse instead of returning them to the kernel:
+/// the engine allocates the same scratch buffers for every band, and each fresh
+/// mapping costs a page fault and a zeroed page per 4 KiB (page zeroing was 7 %
+/// of a denoise profile). Peak memory is unchanged.
+void reuse_freed_memory();
+
 }  // namespace modestack::app

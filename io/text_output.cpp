@@ -41,4 +41,9 @@ void set_io_threads(int threads)
     OIIO::attribute("exr_threads", threads);
 }
 
+void use_single_threaded_exr_files()
+{
+    OIIO::attribute("exr_threads", -1);  // OIIO: -1 = no OpenEXR worker threads
+}
+
 }  // namespace modestack::io

@@ -58,9 +58,14 @@ OutlierCounts clean_row(const MutableBandView& band, std::int64_t i, const Outli
             scratch.sorted[static_cast<std::size_t>(t)] =
                 std::abs(scratch.row[static_cast<std::size_t>(t)] - median);
         const double mad = median_of(scratch.sorted, scratch.row.size());
-        for (int t = 0; t < frames; ++t)
-            scratch.sorted[static_cast<std::size_t>(t)] = std::abs(scratch.row[static_cast<std::size_t>(t)]);
-        const double typical_magnitude = median_of(scratch.sorted, scratch.row.size());
+        // The median of |x|: for a row with no negative value (radiance) that is the median.
+        const bool non_negative = *std::min_element(scratch.row.begin(), scratch.row.end()) >= 0.0;
+        double typical_magnitude = median;
+        if (!non_negative) {
+            for (int t = 0; t < frames; ++t)
+                scratch.sorted[static_cast<std::size_t>(t)] = std::abs(scratch.row[static_cast<std::size_t>(t)]);
+            typical_magnitude = median_of(scratch.sorted, scratch.row.size());
+        }
         const double spread = std::max({mad, options.mad_floor_fraction * typical_magnitude, 1e-30});
         const double threshold = median + options.firefly_k * 1.4826 * spread;
         double excess = 0;
