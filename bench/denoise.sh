@@ -10,7 +10,7 @@
 #    extra channels and once writing exactly the pixels of our gram output
 #    (ZIP's speed depends on the data; the second is the fair floor), and
 #    `modestack denoise --method gram|rsvd`, each with the default --max-memory
-#    and with --max-memory 512M, REPEATS times each (default 3): wall time, CPU
+#    and with --max-memory 512M (and gram with --no-mode-filter), REPEATS times each (default 3): wall time, CPU
 #    time, peak RSS (GNU time), phase times and passes from --json.
 # 4. Times gram against rsvd on a small 320x240 image with 48, 200 and 800
 #    frames, to place `--method auto`'s switch.
@@ -19,7 +19,8 @@
 #
 # Environment: BENCH_DIR, BUILD_DIR (default $BENCH_DIR/build), REPEATS,
 # SMALL_REPEATS (default REPEATS), FRAMES (100), SIZE (1920x1080), SMALL_FRAMES ("48 200 800"), SMALL_SIZE
-# (320x240), SKIP_LARGE=1 or SKIP_SMALL=1 to run one half only.
+# (320x240), SKIP_LARGE=1 or SKIP_SMALL=1 to run one half only, METHODS ("gram rsvd"; gram
+# always runs: the floor of our bytes is its output).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 source bench/common.sh
@@ -32,6 +33,7 @@ frames=${FRAMES:-100}
 size=${SIZE:-1920x1080}
 small_frames=${SMALL_FRAMES:-48 200 800}
 small_size=${SMALL_SIZE:-320x240}
+methods=${METHODS:-gram rsvd}
 results=$bench_dir/results
 mkdir -p "$bench_dir" "$results"
 
@@ -123,13 +125,21 @@ if [[ ${SKIP_LARGE:-0} != 1 ]]; then
     rm -f "$results"/gram-*.json "$results"/rsvd-*.json
     floor_bytes=0
     content_bytes=0
+    labels=()
+    for method in $methods; do
+        labels+=("$method-default" "$method-512M")
+        [[ $method == gram ]] && labels+=(gram-no-filter)
+    done
     for run in $(seq 1 "$repeats"); do
         denoise_run "$tsv" gram-default "$run" "$data" --method gram
         floor_run "$tsv" "$run" "$data"
         floor_run "$tsv" "$run" "$data" "$bench_dir/out/denoised.%04d.exr"
         denoise_run "$tsv" gram-512M "$run" "$data" --method gram --max-memory 512M
-        denoise_run "$tsv" rsvd-default "$run" "$data" --method rsvd
-        denoise_run "$tsv" rsvd-512M "$run" "$data" --method rsvd --max-memory 512M
+        denoise_run "$tsv" gram-no-filter "$run" "$data" --method gram --no-mode-filter
+        if [[ " $methods " == *" rsvd "* ]]; then
+            denoise_run "$tsv" rsvd-default "$run" "$data" --method rsvd
+            denoise_run "$tsv" rsvd-512M "$run" "$data" --method rsvd --max-memory 512M
+        fi
     done
     rm -rf "$bench_dir/out"
     read -r floor_min floor_median < <(bench_stats "$tsv" io-floor 3)
@@ -153,7 +163,7 @@ if [[ ${SKIP_LARGE:-0} != 1 ]]; then
             "$floor_cpu_min" "$floor_cpu_median" \
             "$(awk -F'\t' '$1 == "io-floor" && $6 > m { m = $6 } END { printf "%.0f", m / 1024 }' "$tsv")"
         samples=$((width * height * 3))
-        for label in gram-default gram-512M rsvd-default rsvd-512M; do
+        for label in "${labels[@]}"; do
             read -r wall_min wall_median < <(bench_stats "$tsv" "$label" 3)
             read -r cpu_min cpu_median < <(bench_stats "$tsv" "$label" 7)
             rss_max=$(awk -F'\t' -v l="$label" '$1 == l && $6 > m { m = $6 } END { printf "%.0f", m / 1024 }' "$tsv")
