@@ -162,6 +162,9 @@ nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::Seq
                        {"total", seconds_total}};
     json["peak_memory_bytes"] = peak_resident_bytes();
     json["max_memory_bytes"] = parse_memory_budget(options.max_memory, "--max-memory");
+    // What the program and its open files were counted to hold; the rest went to the plan.
+    json["memory_held_bytes"] = json["max_memory_bytes"].get<std::int64_t>() - report.plan.budget_bytes;
+    json["plan_bytes"] = report.plan.estimated_bytes;
     return json;
 }
 
@@ -204,6 +207,9 @@ int run_denoise(const DenoiseOptions& options)
         return 0;
     }
 
+    // --max-memory bounds the whole process: the engine gets what the program and open files leave.
+    settings.max_memory_bytes =
+        engine_memory_budget(settings.max_memory_bytes, reader, frames_written, reader.selected_channel_count());
     SequenceSource source(reader);
     SequenceSink sink(reader, paths, options.save_modes);
     sink.reuse_rows_of(source);

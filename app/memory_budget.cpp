@@ -1,6 +1,9 @@
 #include "app/memory_budget.h"
 
 #include "app/option_values.h"
+#include "core/common/error.h"
+
+#include <fmt/format.h>
 
 #include <algorithm>
 #include <fstream>
@@ -24,7 +27,43 @@ std::int64_t cgroup_memory_limit()
     }
 }
 
+// Resident bytes of this process now (/proc/self/statm), or 0 when unknown.
+std::int64_t resident_bytes()
+{
+    std::ifstream statm("/proc/self/statm");
+    std::int64_t size = 0, resident = 0;
+    if (!(statm >> size >> resident))
+        return 0;
+    return resident * sysconf(_SC_PAGE_SIZE);
+}
+
+// OpenEXR's buffers for one open file: a chunk uncompressed, compressed (at most
+// about as large) and the codec's scratch.
+std::int64_t open_file_bytes(int width, std::size_t pixel_bytes, int chunk_rows)
+{
+    return 3 * static_cast<std::int64_t>(width) * static_cast<std::int64_t>(pixel_bytes) * chunk_rows;
+}
+
 }  // namespace
+
+std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::SequenceReader& reader, int outputs,
+                                  int extra_channels)
+{
+    std::int64_t files = 0;
+    for (int frame = 0; frame < reader.frame_count(); ++frame) {
+        const std::size_t pixel = reader.native_pixel_bytes(frame);
+        const int rows = reader.chunk_rows(frame);
+        files += open_file_bytes(reader.width(), pixel, rows);
+        if (frame < outputs)  // outputs add sigma channels (half or float: count float)
+            files += open_file_bytes(reader.width(), pixel + 4 * static_cast<std::size_t>(extra_channels), rows);
+    }
+    const std::int64_t held = resident_bytes() + files;
+    if (held >= max_memory_bytes)
+        throw usage_error(fmt::format("--max-memory {} MiB is too small: the program and its {} open files alone "
+                                      "hold about {} MiB",
+                                      max_memory_bytes >> 20, reader.frame_count() + outputs, (held >> 20) + 1));
+    return max_memory_bytes - held;
+}
 
 std::int64_t automatic_memory_budget()
 {

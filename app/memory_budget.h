@@ -4,6 +4,8 @@
 // still has room for them.
 #pragma once
 
+#include "io/sequence_reader.h"
+
 #include <cstdint>
 #include <string>
 
@@ -15,6 +17,16 @@ std::int64_t automatic_memory_budget();
 
 /// "auto" → automatic_memory_budget(); otherwise parse_memory_size(text, option).
 std::int64_t parse_memory_budget(const std::string& text, const std::string& option);
+
+/// The part of `max_memory_bytes` left for the denoise engine's plan, when the
+/// budget is the whole process's: minus what the process holds already (the
+/// program and its libraries, about 130 MiB with Debian's OpenImageIO, and the
+/// opened inputs) and what OpenEXR will hold per open file while reading and
+/// writing (one chunk of scanlines uncompressed, compressed and in the codec's
+/// scratch), for every input and `outputs` outputs with `extra_channels` more
+/// channels. Throws a usage error naming --max-memory when nothing is left.
+std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::SequenceReader& reader, int outputs,
+                                  int extra_channels);
 
 /// Tells the C library to keep freed blocks of up to 32 MiB (glibc's largest
 /// mmap threshold) in its heap for reuse instead of returning them to the kernel:

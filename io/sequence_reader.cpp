@@ -191,6 +191,22 @@ bool SequenceReader::has_unselected_channels(int frame_index) const
     return static_cast<int>(frame.selected.size()) < frame.spec.nchannels;
 }
 
+int SequenceReader::chunk_rows(int frame_index) const
+{
+    const OIIO::ImageSpec& spec = m_frames.at(frame_index)->spec;
+    if (spec.tile_height > 0)
+        return spec.tile_height;
+    const std::string compression = spec.get_string_attribute("compression", "none");
+    if (compression == "zip")
+        return 16;
+    if (compression == "dwab")
+        return 256;
+    if (compression == "piz" || compression == "pxr24" || compression == "b44" || compression == "b44a" ||
+        compression == "dwaa")
+        return 32;
+    return 1;  // none, rle, zips
+}
+
 std::size_t SequenceReader::native_pixel_bytes(int frame_index) const
 {
     return m_frames.at(frame_index)->native_pixel_bytes;

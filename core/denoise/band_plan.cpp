@@ -31,6 +31,7 @@ BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int h
 {
     BandPlan plan;
     plan.halo_rows = halo_rows;
+    plan.budget_bytes = max_memory_bytes;
     const std::int64_t input_row = input_bytes_per_row(shape), work_row = work_bytes_per_row(shape, modes);
     const std::int64_t kept = input_row * shape.height;
     const std::int64_t smallest_work = work_row * (std::min(kChunkRows, shape.height) + 2 * halo_rows);
@@ -48,8 +49,8 @@ BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int h
     std::int64_t rows = (max_memory_bytes - marks) / per_row - 2 * halo_rows;
     rows = rows / kChunkRows * kChunkRows;
     if (rows < kChunkRows)
-        throw usage_error(fmt::format("--max-memory {} MiB is too small for {} frames of width {}: a band of {} rows "
-                                      "needs {} MiB",
+        throw usage_error(fmt::format("--max-memory leaves {} MiB for the shot's data, too little for {} frames of "
+                                      "width {}: a band of {} rows needs {} MiB",
                                       max_memory_bytes >> 20, shape.frames, shape.width, kChunkRows,
                                       mebibytes_rounded_up(per_row * (kChunkRows + 2 * halo_rows) + marks)));
     plan.band_rows = static_cast<int>(std::min<std::int64_t>(rows, shape.height));

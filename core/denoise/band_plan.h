@@ -27,6 +27,7 @@ struct BandPlan {
     int band_rows = 0;       ///< rows per band of the later passes (and of every read when streaming)
     int halo_rows = 0;       ///< extra rows read above and below a band in pass 2
     std::int64_t estimated_bytes = 0;  ///< working memory of the plan
+    std::int64_t budget_bytes = 0;     ///< the budget it was made for
 };
 
 /// Plans for `max_memory_bytes` of working memory. `halo_rows` is what pass 2
