@@ -30,6 +30,10 @@
 namespace modestack::app {
 namespace {
 
+// A whole number of at least 1; CLI::PositiveNumber would print "not in range 0
+// to" the largest double, in full.
+const CLI::Range kAtLeastOne(1, std::numeric_limits<int>::max(), "at least 1");
+
 struct RefineOptions {
     std::string scene;
     std::string denoised;
@@ -294,12 +298,12 @@ Subcommand add_refine_command(CLI::App& parent)
     command->add_option("--frames", options->frames, "Only these frames: 1-48, 30-36, 1,3,7-9");
     command->add_option("--size", options->size, "Image size WIDTHxHEIGHT the frames were rendered at");
     command->add_option("--spp", options->settings.render.spp, "Samples per pixel of the re-render")
-        ->check(CLI::PositiveNumber);
+        ->check(kAtLeastOne);
     command->add_option("--seed", options->settings.render.seed,
                         "Seed of the re-render (differs from render's default 1 so that the new samples are "
                         "independent of the noisy pass)");
     command->add_option("--max-depth", options->settings.render.max_depth, "Maximum number of bounces")
-        ->check(CLI::PositiveNumber);
+        ->check(kAtLeastOne);
     auto* threshold = command->add_option(
         "--threshold", options->threshold,
         "Re-render pixels whose sigma / sqrt(value^2 + floor^2) is at least this (largest over R, G, B)");

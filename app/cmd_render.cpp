@@ -17,10 +17,15 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <limits>
 #include <cstdio>
 
 namespace modestack::app {
 namespace {
+
+// A whole number of at least 1; CLI::PositiveNumber would print "not in range 0
+// to" the largest double, in full.
+const CLI::Range kAtLeastOne(1, std::numeric_limits<int>::max(), "at least 1");
 
 struct RenderCommandOptions {
     std::string scene = "orbit";
@@ -178,14 +183,14 @@ Subcommand add_render_command(CLI::App& parent)
     command->add_option("--scene", options->scene, "Built-in scene: static, orbit, switch, spin (list: print them)");
     command->add_option("-o,--output", options->output, "Output frame sequence, e.g. noisy/shot.####.exr");
     command->add_option("--frames", options->frames, "Frames to render (default: all of the scene's frames)");
-    command->add_option("--spp", options->render.spp, "Samples per pixel")->check(CLI::PositiveNumber);
+    command->add_option("--spp", options->render.spp, "Samples per pixel")->check(kAtLeastOne);
     command->add_option("--size", options->size, "Image size WIDTHxHEIGHT");
     command->add_option("--seed", options->render.seed, "Seed of the sample hash");
     command->add_flag("--fixed-seed", options->render.fixed_seed,
                       "Same random numbers in every frame (temporally correlated noise; a known failure case of "
                       "the denoiser)");
     command->add_option("--max-depth", options->render.max_depth, "Maximum number of bounces (1 = direct light)")
-        ->check(CLI::PositiveNumber);
+        ->check(kAtLeastOne);
     command->add_option("--mask", options->mask,
                         "Render only the pixels where this mask sequence's first channel is non-zero");
     command->add_option("--json", options->json_path, "Write per-frame times, paths/s and rays/s as JSON");

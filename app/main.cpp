@@ -12,6 +12,7 @@
 #include <csignal>
 #include <cstdio>
 #include <exception>
+#include <regex>
 #include <sys/resource.h>
 #include <vector>
 
@@ -38,6 +39,14 @@ void raise_open_file_limit()
         limit.rlim_cur = limit.rlim_max;
         setrlimit(RLIMIT_NOFILE, &limit);
     }
+}
+
+// CLI11's PositiveNumber and NonNegativeNumber checks print the largest double
+// in full (309 digits) as their upper bound: keep the message readable.
+std::string shorten_huge_numbers(const std::string& message)
+{
+    static const std::regex huge("17976931348623157[0-9]{292}(\\.0+)?");
+    return std::regex_replace(message, huge, "1.8e308");
 }
 
 int report(const std::string& message, int code)
@@ -83,7 +92,7 @@ int main(int argc, char** argv)
         for (const auto& subcommand : subcommands)
             if (subcommand.cli->parsed())
                 code = subcommand.usage_exit_code;
-        return report(std::string(error.what()) + " (run 'modestack --help')", code);
+        return report(shorten_huge_numbers(error.what()) + " (run 'modestack --help')", code);
     }
 
     try {

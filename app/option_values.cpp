@@ -24,9 +24,12 @@ std::int64_t parse_memory_size(const std::string& text, const std::string& optio
         scale = 1024.0 * 1024;
     else if (unit == "G" || unit == "GB" || unit == "GiB")
         scale = 1024.0 * 1024 * 1024;
-    if (end == text.c_str() || scale == 0 || !(value > 0))
+    // At least one byte ("0.1" would round to 0) and finite ("1e400" or "inf" would
+    // overflow the conversion to an integer).
+    double bytes = value * scale;
+    if (end == text.c_str() || scale == 0 || !(bytes >= 1) || !(bytes < 0x1p62))
         throw usage_error(fmt::format("{} '{}': not a memory size (examples: 512M, 2G)", option, text));
-    return static_cast<std::int64_t>(value * scale);
+    return static_cast<std::int64_t>(bytes);
 }
 
 void parse_image_size(const std::string& text, int& width, int& height)

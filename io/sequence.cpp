@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 #include <set>
 
 namespace modestack::io {
@@ -40,12 +41,110 @@ bool has_frame_token(const std::string& pattern)
     return percent != std::string::npos && pattern.find('d', percent) != std::string::npos;
 }
 
+// True when `printf_pattern` has exactly one frame conversion (%d or %0Nd, at
+// most two width digits) and every other '%' is a literal "%%". OIIO formats
+// file names with this pattern, and its formatter aborts the process on
+// anything else ("%s", "%n", a second "%d"); the fuzzer found that. A '#' or
+// '@' left over is a second frame token that OIIO would keep literally
+// ("o%d/name.####.exr" wrote o1/name.@@@@.exr): one frame token only.
+bool is_safe_printf_pattern(const std::string& pattern)
+{
+    if (pattern.find_first_of("#@") != std::string::npos)
+        return false;
+    int conversions = 0;
+    for (size_t i = 0; i < pattern.size(); ++i) {
+        if (pattern[i] != '%')
+            continue;
+        if (i + 1 < pattern.size() && pattern[i + 1] == '%') {
+            ++i;
+            continue;
+        }
+        size_t j = i + 1;
+        while (j < pattern.size() && pattern[j] >= '0' && pattern[j] <= '9')
+            ++j;
+        if (j >= pattern.size() || pattern[j] != 'd' || j - i - 1 > 2)
+            return false;
+        ++conversions;
+        i = j;
+    }
+    return conversions == 1;
+}
+
 std::string format_frame(const std::string& printf_pattern, int frame)
 {
     std::vector<std::string> files;
     if (!fs::enumerate_file_sequence(printf_pattern, {frame}, files) || files.size() != 1)
         throw usage_error(fmt::format("cannot make a file name from pattern '{}'", printf_pattern));
     return files.front();
+}
+
+// A shot of a million frames is 11 hours at 24 fps; a longer range is a typo
+// ("1-10000000000") and would need gigabytes for its frame list.
+constexpr long long kMaxFrames = 1000000;
+
+// Parses an optionally signed integer of at most 10 digits at `at` that fits an
+// int; false when there is none.
+bool parse_integer(const std::string& text, size_t& at, long long& value)
+{
+    size_t position = at;
+    bool negative = position < text.size() && text[position] == '-';
+    if (negative || (position < text.size() && text[position] == '+'))
+        ++position;
+    size_t digits = position;
+    value = 0;
+    while (position < text.size() && text[position] >= '0' && text[position] <= '9' && position - digits < 10)
+        value = value * 10 + (text[position++] - '0');
+    if (position == digits || (position < text.size() && text[position] >= '0' && text[position] <= '9'))
+        return false;
+    if (negative)
+        value = -value;
+    if (value < std::numeric_limits<int>::min() || value > std::numeric_limits<int>::max())
+        return false;
+    at = position;
+    return true;
+}
+
+// One comma-separated part of a range: "7", "1-10", "1-10x2" (every 2nd) or
+// "1-10y2" (all but every 2nd), ascending or descending, as OIIO reads them.
+// Our own strict parser, not OIIO's enumerate_sequence: that one accepts
+// garbage ("1-111a--1") and expands any span, however long, before we can
+// check it. Returns false when the part is malformed.
+bool parse_range_part(const std::string& part, long long frames_so_far, const std::string& option,
+                      const std::string& spec, std::vector<int>& frames)
+{
+    size_t at = 0;
+    long long first = 0, last = 0, step = 1;
+    char mode = 'x';
+    if (!parse_integer(part, at, first))
+        return false;
+    last = first;
+    if (at < part.size() && part[at] == '-') {
+        ++at;
+        if (!parse_integer(part, at, last))
+            return false;
+        if (at < part.size() && (part[at] == 'x' || part[at] == 'y')) {
+            mode = part[at++];
+            if (!parse_integer(part, at, step) || step < 1)
+                return false;
+        }
+    }
+    if (at != part.size())
+        return false;
+    long long span = (last >= first ? last - first : first - last) + 1;
+    long long count = mode == 'x' ? (span - 1) / step + 1 : span - ((span - 1) / step + 1);
+    if (frames_so_far + count > kMaxFrames)
+        throw usage_error(fmt::format("{} '{}': more than {} frames (a typo?)", option, spec, kMaxFrames));
+    long long direction = last >= first ? 1 : -1;
+    if (mode == 'x') {
+        for (long long i = 0; i < count; ++i)
+            frames.push_back(static_cast<int>(first + direction * i * step));
+    } else if (step > 1) {
+        // At most count * step / (step - 1) <= 2 * kMaxFrames iterations.
+        for (long long i = 0; i < span; ++i)
+            if (i % step != 0)
+                frames.push_back(static_cast<int>(first + direction * i));
+    }
+    return true;
 }
 
 }  // namespace
@@ -55,14 +154,21 @@ static void require_frame_token(const std::string& pattern, std::string& printf_
 {
     if (!normalize_pattern(pattern, printf_pattern, embedded))
         throw usage_error(fmt::format("'{}' is not a frame-sequence pattern (write name.####.exr, name.%04d.exr "
-                                      "or name.@.exr)",
+                                      "or name.@.exr; a literal % as %%)",
                                       pattern));
 }
 
 std::vector<int> parse_frame_range(const std::string& spec, const std::string& option)
 {
     std::vector<int> frames;
-    if (spec.empty() || !fs::enumerate_sequence(spec, frames) || frames.empty())
+    bool ok = !spec.empty();
+    for (size_t at = 0; ok && at <= spec.size();) {
+        size_t comma = spec.find(',', at);
+        std::string part = spec.substr(at, comma == std::string::npos ? std::string::npos : comma - at);
+        ok = parse_range_part(part, static_cast<long long>(frames.size()), option, spec, frames);
+        at = comma == std::string::npos ? spec.size() + 1 : comma + 1;
+    }
+    if (!ok || frames.empty())
         throw usage_error(fmt::format("{} '{}': not a frame range (examples: 1-48, 1001-1100, 1-100x2, 1,3,7-9)",
                                       option, spec));
     std::set<int> seen;
@@ -78,8 +184,13 @@ bool normalize_pattern(const std::string& pattern, std::string& printf_pattern, 
     embedded_range.clear();
     if (!has_frame_token(pattern))
         return false;
-    return fs::parse_pattern(runs_of_hash_to_at(pattern).c_str(), 0, printf_pattern, embedded_range) &&
-           !printf_pattern.empty();
+    if (!fs::parse_pattern(runs_of_hash_to_at(pattern).c_str(), 0, printf_pattern, embedded_range) ||
+        !is_safe_printf_pattern(printf_pattern)) {
+        printf_pattern.clear();
+        embedded_range.clear();
+        return false;
+    }
+    return true;
 }
 
 FrameSequence find_input_sequence(const std::string& pattern, const std::string& frame_range)
@@ -161,6 +272,10 @@ FrameSequence output_sequence(const std::string& pattern, const std::vector<int>
     sequence.frames = frames;
     std::string embedded;
     if (!normalize_pattern(pattern, sequence.printf_pattern, embedded)) {
+        if (has_frame_token(pattern))
+            throw usage_error(fmt::format("output '{}' is not a frame-sequence pattern (one frame token: ####, @@@@ or "
+                                          "%04d; write a literal % as %%)",
+                                          pattern));
         if (frames.size() > 1)
             throw usage_error(fmt::format("output '{}' has no frame token (write name.####.exr)", pattern));
         sequence.printf_pattern = pattern;

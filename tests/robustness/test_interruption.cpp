@@ -1,0 +1,135 @@
+// Interruption (issue 12): SIGINT and SIGTERM stop a run promptly with exit
+// 130/143 and remove its temporary files; SIGKILL may leave temporary files but
+// never a final-named file that is incomplete; and a re-run with
+// --skip-existing completes the shot with the pixels of an uninterrupted run.
+#include "tests/robustness/robustness_kit.h"
+#include "tests/tools/testkit.h"
+
+#include <doctest/doctest.h>
+
+#include <chrono>
+#include <csignal>
+#include <thread>
+
+using namespace modestack;
+using namespace modestack::robustness;
+using testkit::run_modestack;
+using testkit::TempDir;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+constexpr int kFrames = 16;
+
+float noisy_value(int frame, int x, int y, int c)
+{
+    float noise = 0.02f * static_cast<float>(((frame * 131 + x) * 977 + y * 7 + c) % 17 - 8);
+    return 0.3f + 0.002f * x + 0.003f * y * (1.0f + 0.02f * frame) + 0.05f * c + noise;
+}
+
+std::vector<int> all_frames()
+{
+    std::vector<int> frames;
+    for (int frame = 1; frame <= kFrames; ++frame)
+        frames.push_back(frame);
+    return frames;
+}
+
+// Waits until `directory` holds a temporary file (the run is writing) or the run ended.
+bool wait_for_temporary_file(BackgroundRun& run, const std::string& directory)
+{
+    auto deadline = Clock::now() + std::chrono::seconds(60);
+    while (Clock::now() < deadline && run.running()) {
+        if (!temporary_files(directory).empty())
+            return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return false;
+}
+
+// Every final-named file in `directory` has the pixels of the same file in `reference`.
+void check_complete(const std::string& directory, const std::string& reference)
+{
+    for (const std::string& name : final_files(directory)) {
+        CAPTURE(name);
+        CHECK(testkit::read_native(directory + "/" + name) == testkit::read_native(reference + "/" + name));
+    }
+}
+
+}  // namespace
+
+TEST_CASE("denoise: SIGINT/SIGTERM exit 130/143 leaving nothing, SIGKILL leaves no partial final file, "
+          "--skip-existing completes the shot")
+{
+    TempDir dir;
+    testkit::ExrLayout layout;
+    layout.width = 160;
+    layout.height = 120;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout, noisy_value);
+    std::string input = "denoise " + dir.file("in.####.exr") + " -q --threads 2 -o ";
+    auto reference = run_modestack(input + dir.file("ref/d.####.exr"));
+    REQUIRE_MESSAGE(reference.exit_code == 0, reference.err);
+    REQUIRE(final_files(dir.file("ref")).size() == kFrames);
+
+    for (int signal_number : {SIGINT, SIGTERM, SIGKILL}) {
+        CAPTURE(signal_number);
+        std::string out = dir.file("out" + std::to_string(signal_number));
+        BackgroundRun run(input + out + "/d.####.exr", dir.file("err"));
+        bool writing = wait_for_temporary_file(run, out);
+        auto signalled = Clock::now();
+        run.signal(signal_number);
+        int code = run.wait();
+        double seconds = std::chrono::duration<double>(Clock::now() - signalled).count();
+        if (!writing) {
+            MESSAGE("the run ended before it wrote anything (exit " << code << "); machine too fast for this size");
+            continue;
+        }
+        MESSAGE("signal " << signal_number << ": exit " << code << " after " << seconds << " s, "
+                          << final_files(out).size() << " final and " << temporary_files(out).size()
+                          << " temporary files left");
+        CHECK(code == 128 + signal_number);
+        CHECK(seconds < 10.0);  // promptly: workers poll the cancel flag between tiles
+        if (signal_number != SIGKILL) {
+            std::string err = read_bytes(dir.file("err"));
+            CHECK_MESSAGE(one_line(err), err);
+            CHECK(err.find("interrupted") != std::string::npos);
+            CHECK(temporary_files(out).empty());
+        }
+        // Whatever has a final name is complete (outputs are renamed into place only when finished).
+        check_complete(out, dir.file("ref"));
+
+        auto rerun = run_modestack(input + out + "/d.####.exr --skip-existing");
+        REQUIRE_MESSAGE(rerun.exit_code == 0, rerun.err);
+        CHECK(final_files(out) == final_files(dir.file("ref")));
+        check_complete(out, dir.file("ref"));
+    }
+}
+
+TEST_CASE("render: SIGINT between frames exits 130, every finished frame is complete, no temporary file is left")
+{
+    TempDir dir;
+    std::string render = "render --scene switch --size 96x72 --spp 8 --frames 1-24 -q --threads 2 -o ";
+    auto reference = run_modestack(render + dir.file("ref/r.####.exr"));
+    REQUIRE_MESSAGE(reference.exit_code == 0, reference.err);
+    for (int signal_number : {SIGINT, SIGTERM}) {
+        CAPTURE(signal_number);
+        std::string out = dir.file("out" + std::to_string(signal_number));
+        BackgroundRun run(render + out + "/r.####.exr", dir.file("err"));
+        // Wait for the second frame to be on disk, then interrupt in the middle of the shot.
+        auto deadline = Clock::now() + std::chrono::seconds(60);
+        while (Clock::now() < deadline && run.running() && final_files(out).size() < 2)
+            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        run.signal(signal_number);
+        int code = run.wait();
+        size_t finished = final_files(out).size();
+        MESSAGE("signal " << signal_number << ": exit " << code << ", " << finished << " of 24 frames finished");
+        if (finished == 24 && code == 0)
+            continue;  // too fast to interrupt here: nothing to check
+        CHECK(code == 128 + signal_number);
+        CHECK(one_line(read_bytes(dir.file("err"))));
+        CHECK(temporary_files(out).empty());
+        CHECK(finished < 24);
+        check_complete(out, dir.file("ref"));
+    }
+}
