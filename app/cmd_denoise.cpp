@@ -7,6 +7,7 @@
 #include "app/color_adapters.h"
 #include "app/command.h"
 #include "app/memory_budget.h"
+#include "app/method_options.h"
 #include "app/option_values.h"
 #include "app/run_context.h"
 #include "app/sequence_adapters.h"
@@ -47,6 +48,7 @@ struct DenoiseOptions {
     bool skip_existing = false;
     std::string colorspace;
     std::string ocio_config;
+    MethodOptions method_options;
     CommonOptions common;
 };
 
@@ -172,6 +174,7 @@ int run_denoise(const DenoiseOptions& options)
 {
     auto start = std::chrono::steady_clock::now();
     denoise::Settings settings = make_settings(options);
+    const denoise::Transform transform = apply_method_options(options.method_options, settings);
     RunContext context(options.common);
     io::use_single_threaded_exr_files();  // F files open at once, frames read in parallel by us
     reuse_freed_memory();
@@ -187,6 +190,8 @@ int run_denoise(const DenoiseOptions& options)
                                                    input.frames.size() - 1));
     if (settings.rank.rule == lowrank::RankRule::Fixed && settings.rank.fixed_rank < 1)
         throw usage_error(fmt::format("--rank {}: the number of modes must be at least 1", settings.rank.fixed_rank));
+    apply_training_frames(options.method_options, input.frames, settings);
+    SegmentRun segments = plan_segments(options.method_options, input.frames, !options.save_modes.empty());
     io::check_outputs(output.files, input.files);
     if (!options.save_modes.empty())
         io::check_outputs({(std::filesystem::path(options.save_modes) / "mode.01.exr").string()}, input.files);
@@ -220,9 +225,14 @@ int run_denoise(const DenoiseOptions& options)
         io::HeaderAttribute::of_text("modestack:frames", io::describe_frames(input.frames)),
     };
     append_color_attributes(attributes, color);
+    if (transform.kind != denoise::TransformKind::None)
+        attributes.push_back(
+            io::HeaderAttribute::of_text("modestack:transform", denoise::transform_name(transform)));
     sink.set_attributes(std::move(attributes));
     ColorStream stream(color, source, sink);
-    denoise::Report report = denoise::run_denoise(stream.source(), stream.sink(), settings, context.progress());
+    TransformStream transformed(transform, stream.source(), stream.sink(), settings, options.input);
+    denoise::Report report =
+        run_segmented(segments, transformed.source(), transformed.sink(), settings, context.progress());
     sink.commit();
     if (report.outliers.non_finite > 0)
         context.progress().warn(fmt::format("{} NaN/Inf values in {} were replaced by their pixel's temporal median",
@@ -250,12 +260,20 @@ int run_denoise(const DenoiseOptions& options)
     if (!options.json_path.empty()) {
         nlohmann::ordered_json json = summary_json(options, reader, report, seconds, frames_written);
         json["color"] = color_json(color);
+        json["method"] = method_json(transformed, settings, report, segments, input.frames);
         io::write_text_file(options.json_path, json.dump(2) + "\n");
     }
     if (!options.common.quiet)
         std::fprintf(stderr, "denoised %d of %d frames with N = %d modes (%s rule, %s solver) in %.2f s\n",
                      frames_written, report.shape.frames, report.rank.rank, report.rank.rule.c_str(),
                      report.solver.c_str(), seconds);
+    if (!options.common.quiet && settings.non_negative != denoise::NonNegativeMode::Off)
+        std::fprintf(stderr, "--non-negative changed %lld values in %lld pixel channels\n",
+                     static_cast<long long>(report.non_negative.clamped + report.non_negative.scaled),
+                     static_cast<long long>(report.non_negative.samples));
+    if (!options.common.quiet && segments.automatic)
+        std::fprintf(stderr, "--segments auto: %zu cut(s), %zu part(s)\n", segments.search.cuts.size(),
+                     segments.segments.size());
     return 0;
 }
 
@@ -316,6 +334,7 @@ Subcommand add_denoise_command(CLI::App& parent)
     command->add_option("--ocio-config", options->ocio_config,
                         "OpenColorIO config file; wins over $OCIO, which wins over the config shipped with "
                         "modestack");
+    add_method_options(*command, options->method_options);
     add_common_options(*command, options->common);
     return {command, [options] { return run_denoise(*options); }};
 }

@@ -18,7 +18,11 @@ SequenceSource::SequenceSource(const io::SequenceReader& reader)
 
 void SequenceSource::read_rows(int frame_index, int row_begin, int row_end, float* destination)
 {
-    if (!m_keeping || !m_reader.has_unselected_channels(frame_index)) {
+    // A read of the whole height is a kept shot's single read (never a streamed band,
+    // see band_plan.h): its pass 2 reads nothing, so keeping its rows would only hold
+    // a second copy of the shot (segmented runs start later parts after a sink began).
+    const bool whole_frame = row_begin == 0 && row_end == m_reader.height();
+    if (!m_keeping || whole_frame || !m_reader.has_unselected_channels(frame_index)) {
         m_reader.read_selected(frame_index, row_begin, row_end, destination);
         return;
     }

@@ -11,4 +11,5 @@ target_sources(modestack PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/sequence_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/color_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/memory_budget.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/method_options.cpp
   ${CMAKE_CURRENT_LIST_DIR}/option_values.cpp)

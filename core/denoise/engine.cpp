@@ -1,16 +1,19 @@
 #include "core/denoise/engine.h"
+#include "core/denoise/training.h"
 
 #include "core/common/error.h"
 #include "core/lowrank/basis.h"
 #include "core/lowrank/confidence.h"
 #include "core/lowrank/gram.h"
 #include "core/lowrank/projection.h"
+#include "core/lowrank/shrinkage.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
 namespace modestack::denoise {
 namespace {
@@ -57,7 +60,9 @@ public:
             plan_bands(m_shape, m_settings.max_memory_bytes, halo_rows, plan_modes, m_source.band_bytes_per_row());
         Solver solver = m_settings.solver;
         if (solver == Solver::Auto)
-            solver = m_shape.frames >= m_settings.randomized_from_frames ? Solver::RandomizedSvd : Solver::Gram;
+            solver = m_shape.frames >= m_settings.randomized_from_frames && m_settings.training_frames.empty()
+                         ? Solver::RandomizedSvd
+                         : Solver::Gram;
         m_report.solver = solver_name(solver);
 
         auto start = Clock::now();
@@ -97,6 +102,10 @@ private:
                                           m_settings.rank.fixed_rank, m_shape.frames - 1, m_shape.frames));
         if (m_settings.sigma_radius < 0)
             throw usage_error("--sigma-radius must be 0 or more");
+        if (m_settings.optimal_shrinkage && m_settings.mode_filter.enabled)
+            throw usage_error("--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
+        if (!m_settings.training_frames.empty())
+            check_training_frames(m_settings, m_shape.frames);
     }
 
     // Reads rows [row_begin, row_end) of every frame (frames in parallel) and cleans them.
@@ -185,10 +194,17 @@ private:
 
     lowrank::Basis gram_basis()
     {
-        lowrank::GramAccumulator gram(m_shape.frames);
-        for_each_band([&](Band& band) { for_each_chunk(band, [&](const lowrank::BandView& chunk) { gram.add(chunk); }); });
+        const bool training = !m_settings.training_frames.empty();  // --train-frames: training.h
+        lowrank::GramAccumulator gram(training ? 1 : m_shape.frames);
+        if (training)
+            m_training.emplace(m_shape.frames, m_settings.training_frames);
+        for_each_band([&](Band& band) {
+            for_each_chunk(band, [&](const lowrank::BandView& chunk) {
+                training ? m_training->add(chunk) : gram.add(chunk);
+            });
+        });
         auto start = Clock::now();
-        lowrank::Basis basis = lowrank::basis_from_gram(gram);
+        lowrank::Basis basis = training ? m_training->basis() : lowrank::basis_from_gram(gram);
         basis.passes = 1;
         m_solve_seconds = seconds_since(start);
         return basis;
@@ -214,10 +230,12 @@ private:
             double energy = basis.singular_values[j] * basis.singular_values[j];
             m_report.explained.push_back(total > 0 ? energy / total : 0.0);
         }
+        const Eigen::MatrixXd temporal =
+            m_training ? m_training->temporal_modes(basis, rank) : Eigen::MatrixXd(basis.temporal.leftCols(rank));
         for (int j = 0; j < rank; ++j) {
             std::vector<double> weights(m_shape.frames);
             for (int t = 0; t < m_shape.frames; ++t)
-                weights[t] = basis.temporal(t, j);
+                weights[t] = temporal(t, j);
             m_report.temporal_modes.push_back(weights);
         }
     }
@@ -316,8 +334,10 @@ private:
     void rebuild(const lowrank::Basis& basis, int rank)
     {
         const BandPlan& plan = m_report.plan;
-        Eigen::MatrixXd temporal = basis.temporal.leftCols(rank);
-        Eigen::VectorXd leverages = lowrank::leverages(basis, rank);
+        // With training frames the projection (A) and the rebuild (B) differ: training.h.
+        Eigen::MatrixXd temporal = m_training ? m_training->weights(basis, rank) : basis.temporal.leftCols(rank);
+        Eigen::VectorXd leverages = m_training ? training_leverages(m_training->projector(basis, rank), temporal)
+                                               : lowrank::leverages(basis, rank);
         int frames = m_shape.frames;
         std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
         lowrank::ConfidenceOptions confidence;
@@ -329,10 +349,13 @@ private:
         m_sink.begin({rank, m_report.rank.rule, m_report.solver});
         m_progress.begin("rebuilding frames", m_shape.height);
         const bool filter = m_settings.mode_filter.enabled;
+        if (m_settings.optimal_shrinkage)
+            m_report.shrinkage = lowrank::optimal_shrinkage_factors(basis, m_report.rank.noise_sigma, rank);
         // With the mode filter, pass 2 also projects on the surveyed modes: its noise
         // estimate needs the energy they leave.
         const int projected = filter ? std::max(rank, m_filter_modes) : rank;
-        Eigen::MatrixXd temporal_projected = basis.temporal.leftCols(projected);
+        Eigen::MatrixXd temporal_projected =
+            m_training ? m_training->projector(basis, projected) : basis.temporal.leftCols(projected);
         Band band;
         std::vector<float> rebuilt, sigma, kept_noise;
         for (int row = 0; row < m_shape.height; row += plan.band_rows) {
@@ -362,9 +385,14 @@ private:
             }
             lowrank::confidence_band(noisy, rebuilt_view.view(), shape, leverages, rank, row - data.row_begin,
                                      end - data.row_begin, confidence, sigma_view, filter ? &kept_noise_view : nullptr);
-            if (filter)  // the band's own rows from the filtered coefficients
+            for (size_t j = 0; j < m_report.shrinkage.size(); ++j)  // --shrink optimal, the band's own rows
+                for (std::int64_t i = 0; i < sigma_view.rows; ++i)
+                    coefficients[j * data.rows + offset + i] *= static_cast<float>(m_report.shrinkage[j]);
+            if (filter || m_settings.optimal_shrinkage)  // the band's own rows from the changed coefficients
                 lowrank::rebuild_from_coefficients({coefficients.data() + offset, sigma_view.rows, rank, data.rows},
                                                    temporal, {rebuilt.data() + offset, sigma_view.rows, frames, data.rows});
+            m_report.non_negative += make_non_negative({rebuilt.data() + offset, sigma_view.rows, frames, data.rows},
+                                                       m_settings.non_negative, m_settings.non_negative_floor);
 
             tbb::parallel_for(0, frames, [&](int frame) {
                 m_sink.write_rows(frame, row, end, rebuilt.data() + frame * data.rows + offset,
@@ -384,7 +412,7 @@ private:
         std::int64_t samples = static_cast<std::int64_t>(m_shape.width) * (end - row) * m_shape.channels;
         std::vector<float> modes(static_cast<size_t>(samples) * rank);
         for (int j = 0; j < rank; ++j) {
-            double scale = basis.singular_values[j] > 0 ? 1.0 / basis.singular_values[j] : 0.0;
+            double scale = m_training ? 1.0 : basis.singular_values[j] > 0 ? 1.0 / basis.singular_values[j] : 0.0;
             for (std::int64_t i = 0; i < samples; ++i)
                 modes[j * samples + i] = static_cast<float>(coefficients[j * data.rows + offset + i] * scale);
         }
@@ -402,6 +430,7 @@ private:
     std::vector<std::uint8_t> m_cleaned_samples;
     double m_solve_seconds = 0;
     int m_filter_modes = 0;  // modes the mode filter surveyed
+    std::optional<TrainingGram> m_training;  // --train-frames
 };
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include "core/denoise/band_plan.h"
 #include "core/denoise/frame_stream.h"
 #include "core/denoise/mode_filter.h"
+#include "core/denoise/non_negative.h"
 #include "core/lowrank/outliers.h"
 #include "core/lowrank/randomized_svd.h"
 #include "core/lowrank/rank_rule.h"
@@ -50,6 +51,16 @@ struct Settings {
     /// Spatial filtering of the modes; when enabled, `auto` rank is chosen by its SURE
     /// survey instead of rank.rule (see mode_filter.h).
     ModeFilterOptions mode_filter;
+    /// --non-negative: correction of rebuilt values below non_negative_floor
+    /// (non_negative.h); the floor is f(0) under a --transform.
+    NonNegativeMode non_negative = NonNegativeMode::Off;
+    float non_negative_floor = 0.0f;
+    /// --shrink optimal: scale the kept modes by Gavish–Donoho's Frobenius-optimal
+    /// factors (lowrank/shrinkage.h) instead of keeping them whole; needs the mode filter off.
+    bool optimal_shrinkage = false;
+    /// --train-frames: ascending frame indices the modes are computed from (empty:
+    /// all); every frame is projected on them (training.h). Gram solver, no mode filter.
+    std::vector<int> training_frames;
 };
 
 /// What a run did and found, for the JSON summary and the report.
@@ -64,6 +75,8 @@ struct Report {
     std::vector<std::vector<double>> temporal_modes;  ///< pt(t, j) for j < N: [j][t]
     lowrank::OutlierCounts outliers;
     ModeFilterPlan mode_filter;     ///< per-mode filters and SURE (empty when off)
+    NonNegativeCounts non_negative;      ///< what --non-negative changed
+    std::vector<double> shrinkage;       ///< per kept mode η(σ_j)/σ_j (empty: hard truncation)
     double seconds_filter_survey = 0;  ///< the mode filter's SURE pass
     double seconds_statistics = 0;  ///< pass 1 (read + clean + Gram)
     double seconds_solve = 0;       ///< eigensolve or randomized SVD, and the rank rule

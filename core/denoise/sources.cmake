@@ -2,3 +2,8 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/band_plan.cpp
   ${CMAKE_CURRENT_LIST_DIR}/engine.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mode_filter.cpp)
+target_sources(modestack_core PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/non_negative.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/segments.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/training.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/transform.cpp)

@@ -1,0 +1,179 @@
+#include "app/method_options.h"
+
+#include "core/common/error.h"
+#include "core/denoise/training.h"
+#include "io/sequence.h"
+
+#include <algorithm>
+
+#include <fmt/format.h>
+
+namespace modestack::app {
+
+void add_method_options(CLI::App& command, MethodOptions& options)
+{
+    command.add_option(
+        "--transform", options.transform,
+        "Map the values before the SVD and back after: none (default), log (log(x + e), e = 0.1 x "
+        "the shot's mean; log:F sets the fraction), pow:G (x^(1/G), 1 <= G <= 8). Biased: the "
+        "inverse of a mean is not the mean of the inverse (see the man page)");
+    command.add_flag("--non-negative", options.non_negative,
+                     "Never write negative light: correct rebuilt values below 0 (counted in --json)");
+    command.add_option(
+        "--non-negative-mode", options.non_negative_mode,
+        "How --non-negative corrects: clamp (default; negatives to 0) or keep-sum (also lowers the "
+        "pixel's positive frames so its sum over time is kept)");
+    command.add_option("--shrink", options.shrink,
+                       "hard (default): keep the N modes whole; optimal: scale each by the Gavish-Donoho "
+                       "Frobenius-optimal shrinkage (needs --no-mode-filter)");
+    command.add_option(
+        "--segments", options.segments,
+        "Denoise parts of the shot on their own: auto (cut where the frame-to-frame change jumps far "
+        "above its usual level; one more read) or frame ranges covering the shot, e.g. 1-30,31-60");
+    command.add_option(
+        "--train-frames", options.train_frames,
+        "Compute the modes from these frames only (e.g. 1-48x4) and project every frame on them "
+        "(needs --no-mode-filter)");
+}
+
+void apply_training_frames(const MethodOptions& options, const std::vector<int>& frame_numbers,
+                           denoise::Settings& settings)
+{
+    if (options.train_frames.empty())
+        return;
+    std::vector<int> indices;
+    for (int number : io::parse_frame_range(options.train_frames, "--train-frames")) {
+        auto found = std::find(frame_numbers.begin(), frame_numbers.end(), number);
+        if (found == frame_numbers.end())
+            throw usage_error(fmt::format("--train-frames '{}': frame {} is not in the shot",
+                                          options.train_frames, number));
+        indices.push_back(static_cast<int>(found - frame_numbers.begin()));
+    }
+    std::sort(indices.begin(), indices.end());
+    indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
+    settings.training_frames = indices;
+    denoise::check_training_frames(settings, static_cast<int>(frame_numbers.size()));
+}
+
+SegmentRun plan_segments(const MethodOptions& options, const std::vector<int>& frame_numbers, bool save_modes)
+{
+    SegmentRun run;
+    if (options.segments.empty())
+        return run;
+    if (save_modes)
+        throw usage_error("--segments cannot be combined with --save-modes: each part has modes of its own");
+    if (!options.train_frames.empty())
+        throw usage_error("--segments cannot be combined with --train-frames");
+    run.automatic = options.segments == "auto";
+    if (!run.automatic)
+        run.segments = denoise::parse_segments(options.segments, frame_numbers);
+    return run;
+}
+
+denoise::Report run_segmented(SegmentRun& run, denoise::FrameSource& source, denoise::FrameSink& sink,
+                              const denoise::Settings& settings, Progress& progress)
+{
+    if (run.automatic) {
+        run.search = denoise::find_cuts(source);
+        run.segments = denoise::segments_from_cuts(run.search.cuts, source.shape().frames);
+    }
+    if (run.segments.empty())
+        return denoise::run_denoise(source, sink, settings, progress);
+    run.reports = denoise::run_segments(source, sink, settings, run.segments, progress);
+    return denoise::merge_reports(run.reports);
+}
+
+denoise::Transform apply_method_options(const MethodOptions& options, denoise::Settings& settings)
+{
+    denoise::Transform transform = denoise::parse_transform(options.transform);
+    if (!options.non_negative_mode.empty() && !options.non_negative)
+        throw usage_error("--non-negative-mode needs --non-negative");
+    if (options.non_negative) {
+        settings.non_negative = options.non_negative_mode.empty()
+                                    ? denoise::NonNegativeMode::Clamp
+                                    : denoise::parse_non_negative_mode(options.non_negative_mode);
+        if (settings.non_negative == denoise::NonNegativeMode::KeepSum &&
+            transform.kind != denoise::TransformKind::None)
+            throw usage_error(
+                fmt::format("--non-negative-mode keep-sum would keep sums of transformed values: use "
+                            "clamp with --transform {}",
+                            options.transform));
+    }
+    if (options.shrink != "hard" && options.shrink != "optimal")
+        throw usage_error(fmt::format("--shrink '{}' is not one of hard, optimal", options.shrink));
+    settings.optimal_shrinkage = options.shrink == "optimal";
+    if (settings.optimal_shrinkage && settings.mode_filter.enabled)
+        throw usage_error(
+            "--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
+    return transform;
+}
+
+TransformStream::TransformStream(const denoise::Transform& transform, denoise::FrameSource& source,
+                                 denoise::FrameSink& sink, denoise::Settings& settings,
+                                 const std::string& input)
+    : m_transform(transform), m_source(source), m_sink(sink)
+{
+    if (m_transform.kind == denoise::TransformKind::None)
+        return;
+    if (m_transform.kind == denoise::TransformKind::Log) {
+        m_shot_mean = denoise::sample_shot_mean(source);
+        if (!(m_shot_mean > 0))
+            throw bad_input(
+                input,
+                fmt::format("--transform log needs a shot whose mean is above 0 (it is {})", m_shot_mean));
+        m_transform.epsilon = m_transform.epsilon_fraction * m_shot_mean;
+    }
+    settings.non_negative_floor = denoise::transformed_zero(m_transform);
+    m_transform_source.emplace(source, m_transform);
+    m_inverse_sink.emplace(sink, m_transform, source.shape());
+}
+
+nlohmann::ordered_json method_json(const TransformStream& stream, const denoise::Settings& settings,
+                                   const denoise::Report& report, const SegmentRun& run,
+                                   const std::vector<int>& frame_numbers)
+{
+    const denoise::Transform& transform = stream.transform();
+    nlohmann::ordered_json json;
+    json["transform"] = {{"name", denoise::transform_name(transform)}};
+    if (transform.kind == denoise::TransformKind::Log)
+        json["transform"].update({{"epsilon", transform.epsilon},
+                                  {"epsilon_fraction", transform.epsilon_fraction},
+                                  {"shot_mean", stream.shot_mean()}});
+    json["non_negative"] = {{"mode", denoise::non_negative_mode_name(settings.non_negative)},
+                            {"clamped_values", report.non_negative.clamped},
+                            {"scaled_values", report.non_negative.scaled},
+                            {"samples_changed", report.non_negative.samples}};
+    json["shrink"] = {{"method", settings.optimal_shrinkage ? "optimal" : "hard"},
+                      {"factors", report.shrinkage}};
+    json["train_frames"] = {{"frames", settings.training_frames.size()},
+                            {"of", report.shape.frames},
+                            {"seconds_statistics", report.seconds_statistics}};
+    nlohmann::ordered_json parts = nlohmann::ordered_json::array();
+    for (size_t k = 0; k < run.reports.size(); ++k) {
+        const denoise::FrameSegment& segment = run.segments[k];
+        const denoise::Report& part = run.reports[k];
+        parts.push_back(
+            {{"frames", fmt::format("{}-{}", frame_numbers[static_cast<size_t>(segment.first)],
+                                    frame_numbers[static_cast<size_t>(segment.first + segment.count - 1)])},
+             {"frame_count", segment.count},
+             {"rank", part.rank.rank},
+             {"rule", part.rank.rule},
+             {"singular_values", part.singular_values},
+             {"shrink_factors", part.shrinkage}});
+    }
+    std::vector<int> cuts;
+    for (int cut : run.search.cuts)
+        cuts.push_back(frame_numbers[static_cast<size_t>(cut)]);
+    json["segments"] = {{"mode", run.automatic          ? "auto"
+                                 : run.segments.empty() ? "none"
+                                                        : "list"},
+                        {"cuts", cuts},
+                        {"parts", parts}};
+    if (run.automatic)
+        json["segments"].update({{"distances", run.search.distances},
+                                 {"distance_median", run.search.median},
+                                 {"threshold", run.search.threshold}});
+    return json;
+}
+
+} // namespace modestack::app

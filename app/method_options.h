@@ -1,0 +1,90 @@
+// The options of `denoise` that change the method itself (issue 8): --transform,
+// --non-negative, --non-negative-mode, --shrink, --segments and --train-frames. Adds them to the command,
+// checks their values and combinations before any work (usage errors, exit 2),
+// puts them into the engine's settings, wraps the engine's ends in the
+// transform's decorators (core/denoise/transform.h) and writes their JSON block.
+#pragma once
+
+#include "core/denoise/engine.h"
+#include "core/denoise/segments.h"
+#include "core/denoise/transform.h"
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+
+#include <optional>
+#include <string>
+
+namespace modestack::app {
+
+/// The values as typed.
+struct MethodOptions {
+    std::string transform = "none";
+    bool non_negative = false;
+    std::string non_negative_mode; ///< "" = the default (clamp)
+    std::string shrink = "hard";
+    std::string segments;     ///< "" = one part, "auto" or a list "1-30,31-60"
+    std::string train_frames; ///< "" = all frames, else a frame range
+};
+
+/// Adds the options to `command`.
+void add_method_options(CLI::App& command, MethodOptions& options);
+
+/// Checks the values and combinations (throws usage errors naming the option) and
+/// fills `settings` (after the other options set it, mode filter included).
+/// Returns the parsed transform, its log offset not yet known.
+denoise::Transform apply_method_options(const MethodOptions& options, denoise::Settings& settings);
+
+/// The parts of --segments: a list checked against the shot's frame numbers
+/// before any work (usage errors), or found from the data when `auto`.
+struct SegmentRun {
+    std::vector<denoise::FrameSegment> segments; ///< empty until known (auto)
+    bool automatic = false;
+    denoise::CutSearch search;            ///< what auto saw
+    std::vector<denoise::Report> reports; ///< one per part
+};
+
+/// Parses --train-frames (frame numbers of the shot) into settings.training_frames
+/// (indices); usage errors name the option.
+void apply_training_frames(const MethodOptions& options, const std::vector<int>& frame_numbers,
+                           denoise::Settings& settings);
+
+/// Checks --segments (and that it is not combined with --save-modes or
+/// --train-frames) and parses a list.
+SegmentRun plan_segments(const MethodOptions& options, const std::vector<int>& frame_numbers,
+                         bool save_modes);
+
+/// Runs the engine once, or once per part (finding auto cuts first); returns the
+/// merged report (denoise::merge_reports).
+denoise::Report run_segmented(SegmentRun& run, denoise::FrameSource& source, denoise::FrameSink& sink,
+                              const denoise::Settings& settings, Progress& progress);
+
+/// The engine's ends with --transform in place: for log, ε is set from the mean
+/// of a few frames of `source`, and the floor of --non-negative to f(0).
+class TransformStream {
+public:
+    /// `source` and `sink` must outlive this object; `input` names the shot in errors.
+    TransformStream(const denoise::Transform& transform, denoise::FrameSource& source,
+                    denoise::FrameSink& sink, denoise::Settings& settings, const std::string& input);
+    denoise::FrameSource& source() { return m_transform_source ? *m_transform_source : m_source; }
+    denoise::FrameSink& sink() { return m_inverse_sink ? *m_inverse_sink : m_sink; }
+    const denoise::Transform& transform() const { return m_transform; }
+    /// The sampled shot mean behind log's ε (0 when not needed).
+    double shot_mean() const { return m_shot_mean; }
+
+private:
+    denoise::Transform m_transform;
+    double m_shot_mean = 0;
+    denoise::FrameSource& m_source;
+    denoise::FrameSink& m_sink;
+    std::optional<denoise::TransformSource> m_transform_source;
+    std::optional<denoise::InverseTransformSink> m_inverse_sink;
+};
+
+/// The "method" block of the --json summary: transform, non-negative counts,
+/// shrinkage, segments (cuts as frame numbers, each part's N and spectrum).
+nlohmann::ordered_json method_json(const TransformStream& stream, const denoise::Settings& settings,
+                                   const denoise::Report& report, const SegmentRun& run,
+                                   const std::vector<int>& frame_numbers);
+
+} // namespace modestack::app

@@ -1,0 +1,253 @@
+// End-to-end: the method options of `modestack denoise` (issue 8) through the
+// real binary on a tiny sequence: --transform round-trips a static shot and is
+// recorded, --non-negative leaves no negative value and counts its changes,
+// --shrink optimal reports its factors, --segments splits by a list and finds a
+// planted cut; bad values and combinations exit 2 with one line naming the
+// option and write nothing.
+#include "tests/tools/testkit.h"
+
+#include <doctest/doctest.h>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+using namespace modestack;
+using testkit::run_modestack;
+using testkit::TempDir;
+
+namespace {
+constexpr int kWidth = 24, kHeight = 20, kFrames = 12, kCut = 7; // frame numbers 1..12; lighting changes at 7
+
+float clean_value(int frame, int x, int y, int c)
+{
+    const float t = static_cast<float>(frame) / kFrames;
+    const float base = (x < kWidth / 3 ? 0.0f : 0.5f + 0.2f * std::sin(0.3f * y + c)); // a black third
+    return base * (1.0f + 0.3f * t);
+}
+
+float noise(int frame, int x, int y, int c)
+{
+    std::mt19937 generator(static_cast<unsigned>(((frame * 131 + x) * 977 + y) * 7 + c));
+    std::normal_distribution<float> normal(0.0f, 0.1f);
+    return normal(generator);
+}
+
+float noisy_value(int frame, int x, int y, int c)
+{
+    return clean_value(frame, x, y, c) + noise(frame, x, y, c);
+}
+
+// From frame kCut on a second light brightens the bottom half.
+float cut_value(int frame, int x, int y, int c)
+{
+    return noisy_value(frame, x, y, c) + (frame >= kCut && y >= kHeight / 2 ? 1.5f : 0.0f);
+}
+
+testkit::ExrLayout layout()
+{
+    testkit::ExrLayout result;
+    result.width = kWidth;
+    result.height = kHeight;
+    result.channel_types = {"float", "float", "float"};
+    return result;
+}
+
+std::vector<int> all_frames()
+{
+    std::vector<int> frames;
+    for (int f = 1; f <= kFrames; ++f)
+        frames.push_back(f);
+    return frames;
+}
+
+nlohmann::json load_json(const std::string& path)
+{
+    std::ifstream file(path);
+    std::stringstream text;
+    text << file.rdbuf();
+    return nlohmann::json::parse(text.str());
+}
+
+std::vector<float> all_values(const std::string& printf_pattern)
+{
+    std::vector<float> values;
+    for (int frame = 1; frame <= kFrames; ++frame) {
+        char name[4096];
+        std::snprintf(name, sizeof name, printf_pattern.c_str(), frame);
+        std::vector<float> part = testkit::read_channels(name, {"R", "G", "B"});
+        values.insert(values.end(), part.begin(), part.end());
+    }
+    return values;
+}
+} // namespace
+
+TEST_CASE("denoise --transform: a static shot comes back to float precision, the map is recorded")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("still.%04d.exr"), all_frames(), layout(),
+                            [](int, int x, int y, int c) { return 0.05f + clean_value(1, x, y, c); });
+    for (std::string transform : {"log", "pow:2.2"}) {
+        CAPTURE(transform);
+        std::string out = dir.file(transform.substr(0, 3) + "/d.####.exr"),
+                    json = dir.file(transform + ".json");
+        auto result = run_modestack("denoise " + dir.file("still.####.exr") +
+                                    " -q --no-mode-filter --rank 1 --transform " + transform + " --json " +
+                                    json + " -o " + out);
+        REQUIRE_MESSAGE(result.exit_code == 0, result.err);
+        std::vector<float> input = all_values(dir.file("still.%04d.exr"));
+        std::vector<float> output = all_values(dir.file(transform.substr(0, 3) + "/d.%04d.exr"));
+        double worst = 0;
+        for (size_t i = 0; i < input.size(); ++i)
+            worst = std::max(worst, static_cast<double>(std::fabs(output[i] - input[i])));
+        CHECK(worst < 1e-5);
+        auto summary = load_json(json);
+        CHECK(summary["method"]["transform"]["name"] == transform);
+        if (transform == "log")
+            CHECK(summary["method"]["transform"]["epsilon"].get<double>() > 0);
+        CHECK(testkit::read_string_attribute(dir.file(transform.substr(0, 3) + "/d.0001.exr"),
+                                             "modestack:transform") == transform);
+    }
+}
+
+TEST_CASE("denoise --non-negative: no negative value, the changes are counted")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    std::string input = "denoise " + dir.file("in.####.exr") + " -q --no-mode-filter --rank 1 ";
+    REQUIRE(run_modestack(input + "-o " + dir.file("off/d.####.exr")).exit_code == 0);
+    std::vector<float> off = all_values(dir.file("off/d.%04d.exr"));
+    const auto negatives = std::count_if(off.begin(), off.end(), [](float v) { return v < 0; });
+    REQUIRE(negatives > 0);
+    for (std::string mode : {"clamp", "keep-sum"}) {
+        CAPTURE(mode);
+        auto result = run_modestack(input + "--non-negative --non-negative-mode " + mode + " --json " +
+                                    dir.file(mode + ".json") + " -o " + dir.file(mode + "/d.####.exr"));
+        REQUIRE_MESSAGE(result.exit_code == 0, result.err);
+        std::vector<float> on = all_values(dir.file(mode + "/d.%04d.exr"));
+        CHECK(*std::min_element(on.begin(), on.end()) >= 0.0f);
+        auto summary = load_json(dir.file(mode + ".json"));
+        CHECK(summary["method"]["non_negative"]["mode"] == mode);
+        CHECK(summary["method"]["non_negative"]["clamped_values"] == negatives);
+    }
+}
+
+TEST_CASE("denoise --shrink optimal: factors in [0, 1] per kept mode")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    auto result = run_modestack("denoise " + dir.file("in.####.exr") +
+                                " -q --no-mode-filter --rank 3 --shrink optimal "
+                                "--json " +
+                                dir.file("s.json") + " -o " + dir.file("out/d.####.exr"));
+    REQUIRE_MESSAGE(result.exit_code == 0, result.err);
+    auto shrink = load_json(dir.file("s.json"))["method"]["shrink"];
+    CHECK(shrink["method"] == "optimal");
+    REQUIRE(shrink["factors"].size() == 3);
+    CHECK(shrink["factors"][0].get<double>() > 0.9);
+    for (const auto& factor : shrink["factors"])
+        CHECK((factor.get<double>() >= 0 && factor.get<double>() <= 1));
+}
+
+TEST_CASE("denoise --segments: a list is honoured and auto finds the planted cut")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), cut_value);
+    std::string input = "denoise " + dir.file("in.####.exr") + " -q ";
+    auto listed = run_modestack(input + "--segments 1-6,7-12 --json " + dir.file("l.json") + " -o " +
+                                dir.file("l/d.####.exr"));
+    REQUIRE_MESSAGE(listed.exit_code == 0, listed.err);
+    auto segments = load_json(dir.file("l.json"))["method"]["segments"];
+    CHECK(segments["mode"] == "list");
+    REQUIRE(segments["parts"].size() == 2);
+    CHECK(segments["parts"][1]["frames"] == "7-12");
+    CHECK(testkit::list_directory(dir.file("l")).size() == kFrames);
+
+    auto automatic = run_modestack(input + "--segments auto --json " + dir.file("a.json") + " -o " +
+                                   dir.file("a/d.####.exr"));
+    REQUIRE_MESSAGE(automatic.exit_code == 0, automatic.err);
+    auto found = load_json(dir.file("a.json"));
+    CHECK(found["method"]["segments"]["cuts"] == std::vector<int>{kCut});
+    CHECK(found["frame_count"] == kFrames);
+    // Same parts, same result.
+    CHECK(all_values(dir.file("a/d.%04d.exr")) == all_values(dir.file("l/d.%04d.exr")));
+}
+
+TEST_CASE("denoise --train-frames: modes from every 3rd frame, every frame written, close to the full run")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    std::string input = "denoise " + dir.file("in.####.exr") + " -q --no-mode-filter --rank 2 ";
+    REQUIRE(run_modestack(input + "-o " + dir.file("all/d.####.exr")).exit_code == 0);
+    auto result = run_modestack(input + "--train-frames 1-12x3 --json " + dir.file("t.json") + " -o " +
+                                dir.file("t/d.####.exr"));
+    REQUIRE_MESSAGE(result.exit_code == 0, result.err);
+    auto summary = load_json(dir.file("t.json"));
+    CHECK(summary["method"]["train_frames"]["frames"] == 4);
+    CHECK(summary["singular_values"].size() == 4);
+    CHECK(summary["temporal_modes"][0].size() == kFrames);
+    // Against the clean signal: the rebuild keeps about N/F_T = 2/4 of the noise
+    // variance (0.1²) with modes from 4 frames, N/F = 2/12 with all of them.
+    auto error = [&](const std::string& pattern) {
+        std::vector<float> values = all_values(pattern);
+        double sum = 0;
+        size_t i = 0;
+        for (int frame = 1; frame <= kFrames; ++frame)
+            for (int y = 0; y < kHeight; ++y)
+                for (int x = 0; x < kWidth; ++x)
+                    for (int c = 0; c < 3; ++c, ++i)
+                        sum += (values[i] - clean_value(frame, x, y, c)) *
+                               (values[i] - clean_value(frame, x, y, c));
+        return sum / values.size();
+    };
+    const double all_error = error(dir.file("all/d.%04d.exr")),
+                 trained_error = error(dir.file("t/d.%04d.exr"));
+    MESSAGE("MSE all frames " << all_error << ", modes from 4 of 12 frames " << trained_error);
+    CHECK(all_error < trained_error);
+    CHECK(trained_error < 0.1 * 0.1 * 0.75);
+}
+
+TEST_CASE("denoise method options: bad values and combinations exit 2 with one line, nothing written")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    const std::string out = " -q -o " + dir.file("out/d.####.exr");
+    struct Case {
+        std::string arguments;
+        std::string message;
+    };
+    std::vector<Case> cases{
+        {"--transform exp", "--transform 'exp'"},
+        {"--transform pow:0.5", "--transform 'pow:0.5'"},
+        {"--transform log:-1", "--transform 'log:-1'"},
+        {"--shrink soft", "--shrink 'soft'"},
+        {"--shrink optimal", "--shrink optimal needs --no-mode-filter"},
+        {"--non-negative-mode clamp", "--non-negative-mode needs --non-negative"},
+        {"--non-negative --non-negative-mode zero", "--non-negative-mode 'zero'"},
+        {"--non-negative --non-negative-mode keep-sum --transform log", "--non-negative-mode keep-sum"},
+        {"--segments 1-5,7-12", "--segments '1-5,7-12'"},
+        {"--segments 1-2,3-12", "--segments '1-2,3-12'"},
+        {"--segments auto --save-modes " + dir.file("modes"),
+         "--segments cannot be combined with --save-modes"},
+        {"--no-mode-filter --segments auto --train-frames 1-12x3",
+         "--segments cannot be combined with --train-frames"},
+        {"--train-frames 1-12x3", "--train-frames needs --no-mode-filter"},
+        {"--no-mode-filter --train-frames 10-20", "--train-frames '10-20': frame 13 is not in the shot"},
+        {"--no-mode-filter --train-frames 1,2", "--train-frames gives 2 frames"},
+        {"--no-mode-filter --train-frames 1-12x4 --rank 3", "--rank 3 needs more than 3 training frames"},
+    };
+    for (const Case& c : cases) {
+        CAPTURE(c.arguments);
+        auto result = run_modestack("denoise " + dir.file("in.####.exr") + " " + c.arguments + out);
+        CHECK(result.exit_code == 2);
+        CHECK(result.err.find('\n') == result.err.size() - 1);
+        CHECK_MESSAGE(result.err.find(c.message) != std::string::npos, result.err);
+        CHECK_FALSE(std::ifstream(dir.file("out/d.0001.exr")).good());
+        if (std::ifstream(dir.file("out")).good())
+            CHECK(testkit::list_directory(dir.file("out")).empty());
+        CHECK_FALSE(std::ifstream(dir.file("modes")).good());
+    }
+}
