@@ -183,7 +183,11 @@ int run_run(const RunOptions& options)
     const io::DisplayConverter display(color_config, options.display, options.view, options.exposure);
     const stdfs::path directory(options.directory);
     const stdfs::path json_directory = directory / "json";
-    stdfs::create_directories(json_directory);
+    std::error_code directory_error;
+    stdfs::create_directories(json_directory, directory_error);
+    if (directory_error)
+        throw bad_input(options.directory,
+                        fmt::format("cannot create output directory ({})", directory_error.message()));
     const std::string noisy = sequence_path(options, "noisy"), denoised = sequence_path(options, "denoised"),
                       refined = sequence_path(options, "refined"),
                       final_path = sequence_path(options, "final"), masks = sequence_path(options, "masks"),

@@ -10,7 +10,6 @@
 #include <fstream>
 
 namespace modestack::io {
-namespace {
 
 // OpenEXR allocates an attribute's declared size before reading it: a damaged
 // 280-byte header that declared a 1.7 GB string made `info` take 1.8 GB and 6 s
@@ -46,8 +45,6 @@ void check_exr_attribute_sizes(const std::string& file)
         in.seekg(size, std::ios::cur);
     }
 }
-
-}  // namespace
 
 FrameHeader read_frame_header(const std::string& file)
 {

@@ -9,6 +9,7 @@
 #include <fmt/format.h>
 
 #include <atomic>
+#include <cerrno>
 #include <cstring>
 #include <filesystem>
 #include <set>
@@ -140,6 +141,7 @@ void FrameOutput::open(const void* spec_pointer)
     m_state->output = OIIO::ImageOutput::create("openexr");
     if (!m_state->output)
         throw internal_error("OpenImageIO has no OpenEXR writer");
+    errno = 0;  // fail() reports the system's reason, e.g. a full disk
     if (!m_state->output->open(m_temporary_path, m_state->spec))
         fail("cannot create output");
 }
@@ -157,7 +159,12 @@ FrameOutput::~FrameOutput()
 
 void FrameOutput::fail(const std::string& what)
 {
+    const int system_error = errno;  // OpenEXR's message ("File output failed.") does not say why
     std::string reason = m_state->output ? m_state->output->geterror() : std::string();
+    if (system_error != 0) {
+        const std::string system_reason = std::strerror(system_error);
+        reason = reason.empty() ? system_reason : fmt::format("{}: {}", reason, system_reason);
+    }
     throw bad_input(m_path, reason.empty() ? what : fmt::format("{} ({})", what, reason));
 }
 
@@ -203,6 +210,7 @@ void FrameOutput::write_replaced_rows(int row_begin, int row_end, const unsigned
         }
     }
     const OIIO::ImageSpec& spec = m_state->spec;
+    errno = 0;  // fail() reports the system's reason, e.g. a full disk
     if (!m_state->output->write_scanlines(spec.y + row_begin, spec.y + row_end, spec.z, OIIO::TypeUnknown, out))
         fail(fmt::format("cannot write rows {}-{}", row_begin, row_end - 1));
 }
@@ -216,12 +224,14 @@ bool FrameOutput::needs_input_rows() const
 void FrameOutput::write_float_rows(int row_begin, int row_end, const float* pixels)
 {
     const OIIO::ImageSpec& spec = m_state->spec;
+    errno = 0;  // fail() reports the system's reason, e.g. a full disk
     if (!m_state->output->write_scanlines(spec.y + row_begin, spec.y + row_end, spec.z, OIIO::TypeFloat, pixels))
         fail(fmt::format("cannot write rows {}-{}", row_begin, row_end - 1));
 }
 
 void FrameOutput::commit()
 {
+    errno = 0;  // fail() reports the system's reason, e.g. a full disk
     if (!m_state->output->close())
         fail("cannot finish writing");
     m_state->output.reset();

@@ -21,6 +21,11 @@ std::unique_ptr<detail::OpenFrame> open_frame(const std::string& file, int frame
     auto frame = std::make_unique<detail::OpenFrame>();
     frame->file = file;
     frame->frame_number = frame_number;
+    try {
+        check_exr_attribute_sizes(file);
+    } catch (const Error& error) {  // name the frame too
+        throw Error(ErrorKind::BadInput, error.reason(), file, frame_number);
+    }
     frame->input = OIIO::ImageInput::open(file);
     if (!frame->input) {
         std::string reason = OIIO::geterror();
