@@ -297,8 +297,9 @@ Subcommand add_denoise_command(CLI::App& parent)
     command->add_option("--method", options->method, "Solver: auto, gram (exact F x F eigenproblem) or rsvd "
                                                       "(randomized SVD)");
     command->add_option("--max-memory", options->max_memory,
-                        "Working memory: the shot is kept in memory if it fits, else streamed in bands (512M, 2G; "
-                        "default auto: a quarter of the machine's or container's memory)");
+                        "Memory of the whole process (512M, 2G; default auto: a quarter of the machine's or "
+                        "container's): the shot is kept if it fits in what the program and open files leave, "
+                        "else streamed in bands");
     command->add_option("--frames", options->frames, "Only these frames: 1-48, 1001-1100, 1-100x2, 1,3,7-9");
     command->add_option("--json", options->json_path, "Write a JSON summary: N and why, spectrum, counts, timings");
     command->add_option("--save-modes", options->save_modes,
