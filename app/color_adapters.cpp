@@ -25,7 +25,7 @@ void check_triples(const denoise::ShotShape& shape)
 } // namespace
 
 LinearizingSource::LinearizingSource(denoise::FrameSource& inner, const io::ColorConverter& converter)
-    : m_inner(inner), m_converter(converter)
+    : ForwardingSource(inner), m_converter(converter)
 {
     check_triples(inner.shape());
 }
@@ -38,7 +38,7 @@ void LinearizingSource::read_rows(int frame_index, int row_begin, int row_end, f
 
 DelinearizingSink::DelinearizingSink(denoise::FrameSink& inner, const io::ColorConverter& converter,
                                      denoise::ShotShape shape)
-    : m_inner(inner), m_converter(converter), m_shape(shape)
+    : ForwardingSink(inner), m_converter(converter), m_shape(shape)
 {
     check_triples(shape);
 }

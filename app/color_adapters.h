@@ -26,39 +26,29 @@ class SequenceReader;
 namespace modestack::app {
 
 /// A FrameSource whose rows are another source's, converted to scene-linear.
-class LinearizingSource : public denoise::FrameSource {
+class LinearizingSource : public denoise::ForwardingSource {
 public:
     /// `inner` and `converter` must outlive this object; the source's channels
     /// must be whole RGB triples (3 per layer).
     LinearizingSource(denoise::FrameSource& inner, const io::ColorConverter& converter);
-    denoise::ShotShape shape() const override { return m_inner.shape(); }
     void read_rows(int frame_index, int row_begin, int row_end, float* destination) override;
-    std::int64_t band_bytes_per_row() const override { return m_inner.band_bytes_per_row(); }
 
 private:
-    denoise::FrameSource& m_inner;
     const io::ColorConverter& m_converter;
 };
 
 /// A FrameSink that converts rebuilt rows from scene-linear back to the input
 /// space before forwarding them; sigma and the spatial modes pass unchanged
 /// (they are differences and spreads, in scene-linear units).
-class DelinearizingSink : public denoise::FrameSink {
+class DelinearizingSink : public denoise::ForwardingSink {
 public:
     /// `inner` and `converter` must outlive this object; `shape` is the source's.
     DelinearizingSink(denoise::FrameSink& inner, const io::ColorConverter& converter,
                       denoise::ShotShape shape);
-    void begin(const denoise::RebuildStart& start) override { m_inner.begin(start); }
     void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
                     const float* sigma) override;
-    void write_mode_rows(int row_begin, int row_end, int modes, const float* spatial_modes) override
-    {
-        m_inner.write_mode_rows(row_begin, row_end, modes, spatial_modes);
-    }
-    bool wants_modes() const override { return m_inner.wants_modes(); }
 
 private:
-    denoise::FrameSink& m_inner;
     const io::ColorConverter& m_converter;
     denoise::ShotShape m_shape;
 };

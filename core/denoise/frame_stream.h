@@ -30,6 +30,23 @@ public:
     virtual std::int64_t band_bytes_per_row() const { return 0; }
 };
 
+/// A FrameSource that hands on another's rows unchanged: decorators derive from
+/// it and override only what they change, so a virtual added here is forwarded
+/// by all of them.
+class ForwardingSource : public FrameSource {
+public:
+    explicit ForwardingSource(FrameSource& inner) : m_inner(inner) {}
+    ShotShape shape() const override { return m_inner.shape(); }
+    void read_rows(int frame_index, int row_begin, int row_end, float* destination) override
+    {
+        m_inner.read_rows(frame_index, row_begin, row_end, destination);
+    }
+    std::int64_t band_bytes_per_row() const override { return m_inner.band_bytes_per_row(); }
+
+protected:
+    FrameSource& m_inner;
+};
+
 /// What is decided before the first rebuilt row: outputs record it.
 struct RebuildStart {
     int rank = 0;
@@ -56,6 +73,25 @@ public:
     }
     /// Whether write_mode_rows should be called.
     virtual bool wants_modes() const { return false; }
+};
+
+/// A FrameSink that hands everything on to another unchanged (see ForwardingSource).
+class ForwardingSink : public FrameSink {
+public:
+    explicit ForwardingSink(FrameSink& inner) : m_inner(inner) {}
+    void begin(const RebuildStart& start) override { m_inner.begin(start); }
+    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma) override
+    {
+        m_inner.write_rows(frame_index, row_begin, row_end, rebuilt, sigma);
+    }
+    void write_mode_rows(int row_begin, int row_end, int modes, const float* spatial_modes) override
+    {
+        m_inner.write_mode_rows(row_begin, row_end, modes, spatial_modes);
+    }
+    bool wants_modes() const override { return m_inner.wants_modes(); }
+
+protected:
+    FrameSink& m_inner;
 };
 
 }  // namespace modestack::denoise

@@ -55,41 +55,31 @@ float transformed_zero(const Transform& transform);
 double sample_shot_mean(FrameSource& source, int max_frames = 8);
 
 /// A FrameSource whose rows are another's, mapped by f.
-class TransformSource : public FrameSource {
+class TransformSource : public ForwardingSource {
 public:
     /// `inner` must outlive this object.
-    TransformSource(FrameSource& inner, const Transform& transform) : m_inner(inner), m_transform(transform)
+    TransformSource(FrameSource& inner, const Transform& transform) : ForwardingSource(inner), m_transform(transform)
     {
     }
-    ShotShape shape() const override { return m_inner.shape(); }
     void read_rows(int frame_index, int row_begin, int row_end, float* destination) override;
-    std::int64_t band_bytes_per_row() const override { return m_inner.band_bytes_per_row(); }
 
 private:
-    FrameSource& m_inner;
     Transform m_transform;
 };
 
 /// A FrameSink that maps rebuilt rows back by f⁻¹ and sigma by the delta method
 /// before forwarding them; spatial modes pass unchanged (transformed units).
-class InverseTransformSink : public FrameSink {
+class InverseTransformSink : public ForwardingSink {
 public:
     /// `inner` must outlive this object; `shape` is the source's.
     InverseTransformSink(FrameSink& inner, const Transform& transform, ShotShape shape)
-        : m_inner(inner), m_transform(transform), m_shape(shape)
+        : ForwardingSink(inner), m_transform(transform), m_shape(shape)
     {
     }
-    void begin(const RebuildStart& start) override { m_inner.begin(start); }
     void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
                     const float* sigma) override;
-    void write_mode_rows(int row_begin, int row_end, int modes, const float* spatial_modes) override
-    {
-        m_inner.write_mode_rows(row_begin, row_end, modes, spatial_modes);
-    }
-    bool wants_modes() const override { return m_inner.wants_modes(); }
 
 private:
-    FrameSink& m_inner;
     Transform m_transform;
     ShotShape m_shape;
 };
