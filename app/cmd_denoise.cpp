@@ -126,7 +126,8 @@ nlohmann::ordered_json mode_filter_json(const denoise::Report& report)
 }
 
 nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::SequenceReader& reader,
-                                    const denoise::Report& report, double seconds_total, int frames_written)
+                                    const denoise::Report& report, double seconds_total, int frames_written,
+                                    std::int64_t max_memory_bytes)
 {
     nlohmann::ordered_json json;
     json["version"] = version_string();
@@ -163,9 +164,9 @@ nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::Seq
                        {"rebuild", report.seconds_rebuild},
                        {"total", seconds_total}};
     json["peak_memory_bytes"] = peak_resident_bytes();
-    json["max_memory_bytes"] = parse_memory_budget(options.max_memory, "--max-memory");
+    json["max_memory_bytes"] = max_memory_bytes;
     // What the program and its open files were counted to hold; the rest went to the plan.
-    json["memory_held_bytes"] = json["max_memory_bytes"].get<std::int64_t>() - report.plan.budget_bytes;
+    json["memory_held_bytes"] = max_memory_bytes - report.plan.budget_bytes;
     json["plan_bytes"] = report.plan.estimated_bytes;
     return json;
 }
@@ -213,6 +214,7 @@ int run_denoise(const DenoiseOptions& options)
     }
 
     // --max-memory bounds the whole process: the engine gets what the program and open files leave.
+    const std::int64_t max_memory_bytes = settings.max_memory_bytes;
     settings.max_memory_bytes =
         engine_memory_budget(settings.max_memory_bytes, reader, frames_written, reader.selected_channel_count());
     SequenceSource source(reader);
@@ -258,7 +260,7 @@ int run_denoise(const DenoiseOptions& options)
         io::write_text_file((std::filesystem::path(options.save_modes) / "temporal_modes.csv").string(), csv);
     }
     if (!options.json_path.empty()) {
-        nlohmann::ordered_json json = summary_json(options, reader, report, seconds, frames_written);
+        nlohmann::ordered_json json = summary_json(options, reader, report, seconds, frames_written, max_memory_bytes);
         json["color"] = color_json(color);
         json["method"] = method_json(transformed, settings, report, segments, input.frames);
         io::write_text_file(options.json_path, json.dump(2) + "\n");
