@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include <chrono>
+#include <filesystem>
 #include <limits>
 #include <cstdio>
 
@@ -34,6 +35,7 @@ struct RenderCommandOptions {
     std::string size = "320x240";
     std::string mask;
     std::string json_path;
+    bool skip_existing = false;
     render::RenderOptions render;
     CommonOptions common;
 };
@@ -123,14 +125,29 @@ int run_render(RenderCommandOptions& options)
     io::check_outputs(output.files, mask_files);
 
     RunContext context(options.common);
-    context.progress().begin(fmt::format("rendering {} frames of {} at {} spp", frames.size(), options.scene,
+    // Outputs are renamed into place only when complete, so an existing frame is a
+    // finished one: a re-queued farm job renders only what is missing.
+    std::vector<size_t> to_render;
+    std::vector<int> skipped;
+    for (size_t i = 0; i < frames.size(); ++i) {
+        if (options.skip_existing && std::filesystem::exists(output.files[i]))
+            skipped.push_back(frames[i]);
+        else
+            to_render.push_back(i);
+    }
+    if (to_render.empty()) {
+        context.progress().warn(fmt::format("every output of {} exists already (--skip-existing): nothing to do",
+                                            options.output));
+        return 0;
+    }
+    context.progress().begin(fmt::format("rendering {} frames of {} at {} spp", to_render.size(), options.scene,
                                          options.render.spp),
-                             static_cast<std::int64_t>(frames.size()) * render::tile_count(options.render));
+                             static_cast<std::int64_t>(to_render.size()) * render::tile_count(options.render));
     nlohmann::ordered_json per_frame = nlohmann::ordered_json::array();
     long long paths = 0, rays = 0;
     double seconds = 0;
     render::FrameAovs aovs;
-    for (size_t i = 0; i < frames.size(); ++i) {
+    for (size_t i : to_render) {
         std::vector<std::uint8_t> mask;
         if (!mask_files.empty())
             mask = io::read_mask(mask_files[i], options.render.width, options.render.height);
@@ -156,6 +173,7 @@ int run_render(RenderCommandOptions& options)
         json["scene"] = options.scene;
         json["output"] = output.printf_pattern;
         json["frames"] = io::describe_frames(frames);
+        json["skipped_existing_frames"] = skipped.empty() ? std::string() : io::describe_frames(skipped);
         json["width"] = options.render.width;
         json["height"] = options.render.height;
         json["spp"] = options.render.spp;
@@ -194,6 +212,9 @@ Subcommand add_render_command(CLI::App& parent)
     command->add_option("--mask", options->mask,
                         "Render only the pixels where this mask sequence's first channel is non-zero");
     command->add_option("--json", options->json_path, "Write per-frame times, paths/s and rays/s as JSON");
+    command->add_flag("--skip-existing", options->skip_existing,
+                      "Do not render frames whose output exists already (farm re-runs; outputs appear only "
+                      "when complete)");
     add_common_options(*command, options->common);
     return {command, [options] { return run_render(*options); }};
 }

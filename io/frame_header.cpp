@@ -18,6 +18,10 @@ namespace modestack::io {
 void check_exr_attribute_sizes(const std::string& file)
 {
     std::ifstream in(file, std::ios::binary);
+    // OIIO calls an empty file "not an OpenEXR file"; say what it is (an
+    // interrupted copy, a render that died before writing).
+    if (in && in.peek() == std::ifstream::traits_type::eof())
+        throw bad_input(file, "empty file (0 bytes)");
     std::uint32_t magic = 0, version = 0;
     if (!in.read(reinterpret_cast<char*>(&magic), 4) || !in.read(reinterpret_cast<char*>(&version), 4) ||
         magic != 20000630)

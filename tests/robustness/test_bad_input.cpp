@@ -140,9 +140,10 @@ TEST_CASE("denoise: broken sequences and broken files exit 1 naming the file, no
         bool in_chunk = kDamages[i] == Damage::OffsetTableGarbage || kDamages[i] == Damage::ChunkGarbage ||
                         kDamages[i] == Damage::ChunkCut;
         // A header cut inside an attribute is caught by the header walk, before OpenEXR.
-        const char* expected = in_chunk                          ? "cannot read rows 0-7"
-                               : kDamages[i] == Damage::HeaderCut ? "damaged header"
-                                                                  : "cannot read image header";
+        const char* expected = in_chunk                           ? "cannot read rows 0-7"
+                               : kDamages[i] == Damage::HeaderCut  ? "damaged header"
+                               : kDamages[i] == Damage::ZeroBytes ? "empty file (0 bytes)"
+                                                                   : "cannot read image header";
         cases.push_back({"denoise " + dir.file(damaged_name(i) + ".####.exr") + out, 1, file + expected});
     }
     check_cases(cases, dir.file("out"));
@@ -209,7 +210,8 @@ TEST_CASE("info, compare and refine: damaged and missing frames exit with their 
         // OpenEXR would allocate the 1.7 GB first (found by fuzz/exr_header); io/frame_header.cpp refuses it.
         {"info " + dir.file("huge.####.exr"), 1, "huge.0001.exr: damaged header: attribute"},
         {"info " + dir.file("folder.####.exr") + " --frames 1-5", 1, "folder.0003.exr: is a directory"},
-        {"info " + dir.file(damaged_name(0) + ".####.exr"), 1, damaged_name(0) + ".0003.exr: cannot read image header"},
+        {"info " + dir.file(damaged_name(0) + ".####.exr"), 1, damaged_name(0) + ".0003.exr: empty file (0 bytes)"},
+        {"info " + dir.file(damaged_name(1) + ".####.exr"), 1, damaged_name(1) + ".0003.exr: cannot read image header"},
         {"info " + dir.file(damaged_name(2) + ".####.exr"), 1, damaged_name(2) + ".0003.exr: damaged header: attribute"},
         {"info " + in + " --frames 0-3", 1, "in.0000.exr: frame 0 is missing"},
         {"info " + in + " --json " + dir.path(), 1, dir.path()},

@@ -106,13 +106,14 @@ TEST_CASE("denoise: SIGINT/SIGTERM exit 130/143 leaving nothing, SIGKILL leaves 
     }
 }
 
-TEST_CASE("render: SIGINT between frames exits 130, every finished frame is complete, no temporary file is left")
+TEST_CASE("render: SIGINT/SIGTERM between frames exit 130/143 leaving no temporary file, SIGKILL no partial "
+          "frame, --skip-existing renders only the missing frames")
 {
     TempDir dir;
     std::string render = "render --scene switch --size 96x72 --spp 8 --frames 1-24 -q --threads 2 -o ";
     auto reference = run_modestack(render + dir.file("ref/r.####.exr"));
     REQUIRE_MESSAGE(reference.exit_code == 0, reference.err);
-    for (int signal_number : {SIGINT, SIGTERM}) {
+    for (int signal_number : {SIGINT, SIGTERM, SIGKILL}) {
         CAPTURE(signal_number);
         std::string out = dir.file("out" + std::to_string(signal_number));
         BackgroundRun run(render + out + "/r.####.exr", dir.file("err"));
@@ -127,9 +128,32 @@ TEST_CASE("render: SIGINT between frames exits 130, every finished frame is comp
         if (finished == 24 && code == 0)
             continue;  // too fast to interrupt here: nothing to check
         CHECK(code == 128 + signal_number);
-        CHECK(one_line(read_bytes(dir.file("err"))));
-        CHECK(temporary_files(out).empty());
+        if (signal_number != SIGKILL) {
+            CHECK(one_line(read_bytes(dir.file("err"))));
+            CHECK(temporary_files(out).empty());
+        }
         CHECK(finished < 24);
         check_complete(out, dir.file("ref"));
+
+        // The re-run renders only what is missing; its JSON names the frames it skipped.
+        auto rerun = run_modestack(render + out + "/r.####.exr --skip-existing --json " + out + ".json");
+        REQUIRE_MESSAGE(rerun.exit_code == 0, rerun.err);
+        CHECK(final_files(out) == final_files(dir.file("ref")));
+        check_complete(out, dir.file("ref"));
+        std::string summary = read_bytes(out + ".json");
+        CHECK(summary.find("\"skipped_existing_frames\": \"\"") == std::string::npos);
     }
+}
+
+TEST_CASE("render --skip-existing with every frame present renders nothing and says so")
+{
+    TempDir dir;
+    std::string render = "render --scene switch --size 32x24 --spp 1 --frames 1-3 --threads 2 -o " +
+                         dir.file("r.####.exr");
+    REQUIRE(run_modestack(render + " -q").exit_code == 0);
+    std::string before = read_bytes(dir.file("r.0002.exr"));
+    auto rerun = run_modestack(render + " --skip-existing");
+    REQUIRE_MESSAGE(rerun.exit_code == 0, rerun.err);
+    CHECK(rerun.err.find("nothing to do") != std::string::npos);
+    CHECK(read_bytes(dir.file("r.0002.exr")) == before);
 }
