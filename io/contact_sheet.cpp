@@ -1,6 +1,7 @@
 #include "io/contact_sheet.h"
 
 #include "core/common/error.h"
+#include "io/temporary_file.h"
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -50,9 +51,8 @@ void write_contact_sheet(const std::string& path, int columns, const std::vector
                         to_byte(encoded[(static_cast<std::size_t>(y) * cell_width + x) * 3 + c]);
     }
     std::filesystem::path final_path(path);
-    std::string temporary = (final_path.parent_path() /
-                             fmt::format(".{}.{}.modestack-tmp", final_path.filename().string(), getpid()))
-                                .string();
+    remove_stale_temporaries(path);
+    std::string temporary = temporary_path_for(path);
     auto output = OIIO::ImageOutput::create("png");
     if (!output)
         throw internal_error("OpenImageIO has no PNG writer");

@@ -3,6 +3,7 @@
 #include "core/common/error.h"
 #include "io/detail/open_frame.h"
 #include "io/sequence_reader.h"
+#include "io/temporary_file.h"
 
 #include <Imath/half.h>
 #include <OpenImageIO/imageio.h>
@@ -20,14 +21,6 @@ namespace modestack::io {
 namespace {
 
 namespace stdfs = std::filesystem;
-
-std::string temporary_name_for(const std::string& path)
-{
-    static std::atomic<int> counter{0};
-    stdfs::path final_path(path);
-    std::string name = fmt::format(".{}.{}-{}.modestack-tmp", final_path.filename().string(), getpid(), counter++);
-    return (final_path.parent_path() / name).string();
-}
 
 // Stores a float in a channel of the given pixel type.
 void store_value(float value, OIIO::TypeDesc type, unsigned char* destination)
@@ -137,7 +130,8 @@ void FrameOutput::open(const void* spec_pointer)
 {
     const OIIO::ImageSpec& spec = *static_cast<const OIIO::ImageSpec*>(spec_pointer);
     m_state->spec = spec;
-    m_temporary_path = temporary_name_for(m_path);
+    remove_stale_temporaries(m_path);
+    m_temporary_path = temporary_path_for(m_path);
     m_state->output = OIIO::ImageOutput::create("openexr");
     if (!m_state->output)
         throw internal_error("OpenImageIO has no OpenEXR writer");

@@ -5,6 +5,7 @@ target_sources(modestack_io PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/sequence_reader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_output.cpp
   ${CMAKE_CURRENT_LIST_DIR}/text_output.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/temporary_file.cpp
   ${CMAKE_CURRENT_LIST_DIR}/color_management.cpp
   ${CMAKE_CURRENT_LIST_DIR}/contact_sheet.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mask_image.cpp)

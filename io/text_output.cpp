@@ -1,6 +1,7 @@
 #include "io/text_output.h"
 
 #include "core/common/error.h"
+#include "io/temporary_file.h"
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -19,9 +20,8 @@ void write_text_file(const std::string& path, const std::string& text)
     std::error_code error;
     if (target.has_parent_path())
         stdfs::create_directories(target.parent_path(), error);
-    std::string temporary = (target.parent_path() / fmt::format(".{}.{}.modestack-tmp", target.filename().string(),
-                                                                 getpid()))
-                                .string();
+    remove_stale_temporaries(path);
+    std::string temporary = temporary_path_for(path);
     std::FILE* file = std::fopen(temporary.c_str(), "wb");
     if (!file)
         throw bad_input(path, "cannot create file");

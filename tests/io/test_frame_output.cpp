@@ -4,14 +4,21 @@
 #include "io/frame_output.h"
 #include "io/sequence.h"
 #include "io/sequence_reader.h"
+#include "io/temporary_file.h"
 #include "tests/tools/testkit.h"
 
 #include <doctest/doctest.h>
 
 #include <Imath/half.h>
 
+#include <fmt/format.h>
+
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <sys/wait.h>
+#include <unistd.h>
 
 using namespace modestack;
 using testkit::TempDir;
@@ -110,6 +117,79 @@ TEST_CASE("atomic write: nothing under the final name until commit, no temporary
         // Destroyed without commit, as when an error or interrupt unwinds.
     }
     CHECK(testkit::list_directory(dir.path()) == std::vector<std::string>{"in.0001.exr"});
+}
+
+namespace {
+
+// The pid of a process that has exited and been reaped.
+long gone_pid()
+{
+    pid_t child = fork();
+    if (child == 0)
+        _exit(0);
+    int status = 0;
+    waitpid(child, &status, 0);
+    return child;
+}
+
+std::string this_host()
+{
+    char buffer[256] = {};
+    gethostname(buffer, sizeof buffer - 1);
+    return buffer;
+}
+
+void touch(const std::string& path) { std::ofstream(path) << "partial"; }
+
+}  // namespace
+
+TEST_CASE("a killed run's temporaries are removed by the next output into the directory, nobody else's")
+{
+    TempDir dir;
+    long gone = gone_pid();
+    std::string host = this_host();
+    std::string dead_here = fmt::format(".out.0001.exr.{}.{}-3.modestack-tmp", host, gone);
+    std::string dead_text = fmt::format(".run.json.{}.{}-0.modestack-tmp", host, gone);
+    std::string alive_here = fmt::format(".out.0002.exr.{}.{}-0.modestack-tmp", host, getpid());
+    std::string other_host = fmt::format(".out.0003.exr.{}x.{}-0.modestack-tmp", host, gone);
+    std::string not_ours = fmt::format(".out.0004.exr.{}.{}.modestack-tmp", host, gone);  // no -N
+    for (const std::string& name : {dead_here, dead_text, alive_here, other_host, not_ours})
+        touch(dir.file(name));
+
+    io::NewImageDescription image;
+    image.width = 2;
+    image.height = 2;
+    image.channel_names = {"R", "G", "B"};
+    image.channel_types = {"half", "half", "half"};
+    std::vector<float> pixels(12, 0.5f);
+    io::FrameOutput output(dir.file("new.exr"), image, {});
+    output.write_float_rows(0, 2, pixels.data());
+    output.commit();
+
+    std::vector<std::string> left = testkit::list_directory(dir.path());
+    CHECK(std::find(left.begin(), left.end(), dead_here) == left.end());
+    CHECK(std::find(left.begin(), left.end(), dead_text) == left.end());
+    for (const std::string& kept : {alive_here, other_host, not_ours, std::string("new.exr")})
+        CHECK_MESSAGE(std::find(left.begin(), left.end(), kept) != left.end(), kept);
+    CHECK(left.size() == 4);
+
+    // Once per directory per process: a second output does not scan again.
+    touch(dir.file(dead_here));
+    CHECK(io::remove_stale_temporaries(dir.file("other.exr")) == 0);
+    TempDir fresh;
+    touch(fresh.file(dead_here));
+    CHECK(io::remove_stale_temporaries(fresh.file("other.exr")) == 1);
+    CHECK(testkit::list_directory(fresh.path()).empty());
+}
+
+TEST_CASE("temporary names are hidden, next to the final file, and unique")
+{
+    std::string first = io::temporary_path_for("/shots/a/out.0001.exr");
+    std::string second = io::temporary_path_for("/shots/a/out.0001.exr");
+    CHECK(first != second);
+    CHECK(first.rfind("/shots/a/.out.0001.exr.", 0) == 0);
+    CHECK(first.size() > 14);
+    CHECK(first.compare(first.size() - 14, 14, ".modestack-tmp") == 0);
 }
 
 TEST_CASE("new images: float and half channels written from float data")

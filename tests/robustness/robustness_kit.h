@@ -47,7 +47,7 @@ void write_bytes(const std::string& path, const std::string& bytes);
 bool one_line(const std::string& text);
 
 /// Files under `directory` (recursively, relative paths, sorted) whose name is
-/// a modestack temporary file (`.NAME.PID-N.modestack-tmp`).
+/// a modestack temporary file (`.NAME.HOST.PID-N.modestack-tmp`).
 std::vector<std::string> temporary_files(const std::string& directory);
 /// Every other regular file under `directory` (recursively, relative, sorted).
 std::vector<std::string> final_files(const std::string& directory);

@@ -1,7 +1,8 @@
 // Interruption (issue 12): SIGINT and SIGTERM stop a run promptly with exit
 // 130/143 and remove its temporary files; SIGKILL may leave temporary files but
 // never a final-named file that is incomplete; and a re-run with
-// --skip-existing completes the shot with the pixels of an uninterrupted run.
+// --skip-existing completes the shot with the pixels of an uninterrupted run
+// and removes the temporaries the killed run left.
 #include "tests/robustness/robustness_kit.h"
 #include "tests/tools/testkit.h"
 
@@ -99,9 +100,11 @@ TEST_CASE("denoise: SIGINT/SIGTERM exit 130/143 leaving nothing, SIGKILL leaves 
         // Whatever has a final name is complete (outputs are renamed into place only when finished).
         check_complete(out, dir.file("ref"));
 
+        // The re-run also removes what the killed run left: its process is gone.
         auto rerun = run_modestack(input + out + "/d.####.exr --skip-existing");
         REQUIRE_MESSAGE(rerun.exit_code == 0, rerun.err);
         CHECK(final_files(out) == final_files(dir.file("ref")));
+        CHECK(temporary_files(out).empty());
         check_complete(out, dir.file("ref"));
     }
 }
@@ -139,6 +142,7 @@ TEST_CASE("render: SIGINT/SIGTERM between frames exit 130/143 leaving no tempora
         auto rerun = run_modestack(render + out + "/r.####.exr --skip-existing --json " + out + ".json");
         REQUIRE_MESSAGE(rerun.exit_code == 0, rerun.err);
         CHECK(final_files(out) == final_files(dir.file("ref")));
+        CHECK(temporary_files(out).empty());
         check_complete(out, dir.file("ref"));
         std::string summary = read_bytes(out + ".json");
         CHECK(summary.find("\"skipped_existing_frames\": \"\"") == std::string::npos);
