@@ -149,9 +149,23 @@ bool parse_range_part(const std::string& part, long long frames_so_far, const st
 
 }  // namespace
 
+// OIIO parses patterns with std::regex, which recurses once per character: a
+// 120 kB pattern overflowed the stack (found by fuzz/frame_range). No path is
+// longer than PATH_MAX, so nothing longer is a pattern.
+constexpr size_t kMaxPatternBytes = 4096;
+
+// Throws a usage error for a pattern longer than any path, quoting its start only.
+static void require_path_length(const std::string& pattern, const char* what)
+{
+    if (pattern.size() > kMaxPatternBytes)
+        throw usage_error(fmt::format("{} '{}...' is {} bytes long; a path has at most {}", what,
+                                      pattern.substr(0, 40), pattern.size(), kMaxPatternBytes));
+}
+
 // Normalizes an input pattern, or throws a usage error saying how to write one.
 static void require_frame_token(const std::string& pattern, std::string& printf_pattern, std::string& embedded)
 {
+    require_path_length(pattern, "pattern");
     if (!normalize_pattern(pattern, printf_pattern, embedded))
         throw usage_error(fmt::format("'{}' is not a frame-sequence pattern (write name.####.exr, name.%04d.exr "
                                       "or name.@.exr; a literal % as %%)",
@@ -182,7 +196,7 @@ bool normalize_pattern(const std::string& pattern, std::string& printf_pattern, 
 {
     printf_pattern.clear();
     embedded_range.clear();
-    if (!has_frame_token(pattern))
+    if (pattern.size() > kMaxPatternBytes || !has_frame_token(pattern))
         return false;
     if (!fs::parse_pattern(runs_of_hash_to_at(pattern).c_str(), 0, printf_pattern, embedded_range) ||
         !is_safe_printf_pattern(printf_pattern)) {
@@ -271,6 +285,7 @@ FrameSequence output_sequence(const std::string& pattern, const std::vector<int>
     sequence.pattern = pattern;
     sequence.frames = frames;
     std::string embedded;
+    require_path_length(pattern, "output");
     if (!normalize_pattern(pattern, sequence.printf_pattern, embedded)) {
         if (has_frame_token(pattern))
             throw usage_error(fmt::format("output '{}' is not a frame-sequence pattern (one frame token: ####, @@@@ or "

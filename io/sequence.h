@@ -24,7 +24,7 @@ struct FrameSequence {
 std::vector<int> parse_frame_range(const std::string& spec, const std::string& option = "--frames");
 
 /// Converts a pattern to printf form. Returns false when `pattern` has no frame
-/// token (#, @ or %0Nd). `embedded_range` receives a range written inside the
+/// token (#, @ or %0Nd) or is longer than any path (4096 bytes). `embedded_range` receives a range written inside the
 /// pattern (`name.1-10#.exr`), or "".
 bool normalize_pattern(const std::string& pattern, std::string& printf_pattern,
                        std::string& embedded_range);

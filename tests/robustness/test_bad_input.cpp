@@ -209,6 +209,10 @@ TEST_CASE("info, compare and refine: damaged and missing frames exit with their 
     std::vector<Case> cases{
         // OpenEXR would allocate the 1.7 GB first (found by fuzz/exr_header); io/frame_header.cpp refuses it.
         {"info " + dir.file("huge.####.exr"), 1, "huge.0001.exr: damaged header: attribute"},
+        // OIIO's std::regex recursed once per character: 60 kB crashed (found by fuzz/frame_range).
+        {"info " + dir.file("d." + std::string(60000, '@') + ".exr"), 2, "bytes long; a path has at most 4096"},
+        {"render --scene switch -o " + dir.file("out/d." + std::string(60000, '#') + ".exr"), 2,
+         "output '" + dir.file("out/d.").substr(0, 40)},
         {"info " + dir.file("folder.####.exr") + " --frames 1-5", 1, "folder.0003.exr: is a directory"},
         {"info " + dir.file(damaged_name(0) + ".####.exr"), 1, damaged_name(0) + ".0003.exr: empty file (0 bytes)"},
         {"info " + dir.file(damaged_name(1) + ".####.exr"), 1, damaged_name(1) + ".0003.exr: cannot read image header"},
