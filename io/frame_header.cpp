@@ -1,6 +1,7 @@
 #include "io/frame_header.h"
 
 #include "core/common/error.h"
+#include "io/detail/open_image.h"
 
 #include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
@@ -57,11 +58,10 @@ FrameHeader read_frame_header(const std::string& file)
     if (OIIO::Filesystem::is_directory(file))
         throw bad_input(file, "is a directory, not an image file");
     check_exr_attribute_sizes(file);
-    auto input = OIIO::ImageInput::open(file);
-    if (!input) {
-        std::string reason = OIIO::geterror();
+    std::string reason;
+    auto input = detail::open_image(file, reason);
+    if (!input)
         throw bad_input(file, fmt::format("cannot read image header ({})", reason.empty() ? "unknown format" : reason));
-    }
     const OIIO::ImageSpec& spec = input->spec();
     FrameHeader header;
     header.file = file;

@@ -1,6 +1,7 @@
 #include "io/mask_image.h"
 
 #include "core/common/error.h"
+#include "io/detail/open_image.h"
 #include "io/frame_header.h"
 
 #include <OpenImageIO/imageio.h>
@@ -14,9 +15,10 @@ std::vector<std::uint8_t> read_mask(const std::string& file, int width, int heig
     if (header.width != width || header.height != height)
         throw bad_input(file, fmt::format("mask is {}x{} but the render is {}x{}", header.width, header.height, width,
                                           height));
-    auto input = OIIO::ImageInput::open(file);
+    std::string reason;
+    auto input = detail::open_image(file, reason);
     if (!input)
-        throw bad_input(file, "cannot read mask");
+        throw bad_input(file, fmt::format("cannot read mask ({})", reason));
     std::vector<float> values(static_cast<size_t>(width) * height);
     if (!input->read_image(0, 0, 0, 1, OIIO::TypeFloat, values.data()))
         throw bad_input(file, fmt::format("cannot read mask ({})", input->geterror()));

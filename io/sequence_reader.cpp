@@ -2,6 +2,7 @@
 
 #include "core/common/error.h"
 #include "io/detail/open_frame.h"
+#include "io/detail/open_image.h"
 #include "io/frame_header.h"
 
 #include <Imath/half.h>
@@ -26,9 +27,9 @@ std::unique_ptr<detail::OpenFrame> open_frame(const std::string& file, int frame
     } catch (const Error& error) {  // name the frame too
         throw Error(ErrorKind::BadInput, error.reason(), file, frame_number);
     }
-    frame->input = OIIO::ImageInput::open(file);
+    std::string reason;
+    frame->input = detail::open_image(file, reason);
     if (!frame->input) {
-        std::string reason = OIIO::geterror();
         throw Error(ErrorKind::BadInput,
                     fmt::format("cannot read image header ({})", reason.empty() ? "unknown format" : reason), file,
                     frame_number);
