@@ -9,6 +9,8 @@
 #include "app/memory_budget.h"
 #include "app/method_options.h"
 #include "app/option_values.h"
+#include "app/report/denoise_report.h"
+#include "app/report/html_report.h"
 #include "app/run_context.h"
 #include "app/sequence_adapters.h"
 #include "core/common/error.h"
@@ -22,6 +24,7 @@
 
 #include <chrono>
 #include <filesystem>
+#include <optional>
 #include <sys/resource.h>
 
 namespace modestack::app {
@@ -38,6 +41,7 @@ struct DenoiseOptions {
     std::string frames;
     std::string json_path;
     std::string save_modes;
+    std::string report_path;
     bool no_firefly_clamp = false;
     double firefly_k = 6.0;
     int sigma_radius = 2;
@@ -171,6 +175,31 @@ nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::Seq
     return json;
 }
 
+// The --report page of a finished run; also handed to `modestack run` (report::publish_report).
+void write_denoise_report(const DenoiseOptions& options, const io::SequenceReader& reader,
+                          const report::Collector& collector, const denoise::Report& merged,
+                          const SegmentRun& segments, const std::vector<int>& frame_numbers, double seconds)
+{
+    std::vector<report::EngineRun> runs;
+    if (segments.reports.empty())
+        runs.push_back({0, merged.shape.frames, &merged});
+    for (size_t k = 0; k < segments.reports.size() && k < segments.segments.size(); ++k)
+        runs.push_back({segments.segments[k].first, segments.segments[k].count, &segments.reports[k]});
+    report::ReportData data = report::gather_report(collector, runs, frame_numbers);
+    data.title = fmt::format("modestack denoise: {}", reader.sequence().printf_pattern);
+    data.version = version_string();
+    data.command = command_line();
+    data.input = reader.sequence().printf_pattern;
+    data.channel_names = reader.selected_channel_names();
+    data.seconds.push_back({"denoise: total", seconds});
+    if (!options.method_options.transform.empty() && options.method_options.transform != "none")
+        data.notes.push_back(fmt::format("The engine worked under --transform {}; the rank slider projects the "
+                                         "linear frames on its modes, an approximation.",
+                                         options.method_options.transform));
+    report::write_report(options.report_path, data);
+    report::publish_report(std::move(data));
+}
+
 int run_denoise(const DenoiseOptions& options)
 {
     auto start = std::chrono::steady_clock::now();
@@ -194,6 +223,8 @@ int run_denoise(const DenoiseOptions& options)
     apply_training_frames(options.method_options, input.frames, settings);
     SegmentRun segments = plan_segments(options.method_options, input.frames, !options.save_modes.empty());
     io::check_outputs(output.files, input.files);
+    if (!options.report_path.empty())
+        report::check_report_path(options.report_path, input.files);
     if (!options.save_modes.empty())
         io::check_outputs({(std::filesystem::path(options.save_modes) / "mode.01.exr").string()}, input.files);
     io::SequenceReader reader(input, options.layers);
@@ -232,7 +263,15 @@ int run_denoise(const DenoiseOptions& options)
             io::HeaderAttribute::of_text("modestack:transform", denoise::transform_name(transform)));
     sink.set_attributes(std::move(attributes));
     ColorStream stream(color, source, sink);
-    TransformStream transformed(transform, stream.source(), stream.sink(), settings, options.input);
+    // --report: the collector sees scene-linear rows, outside --transform (report/report_collector.h).
+    std::optional<report::Collector> collector;
+    if (!options.report_path.empty()) {
+        settings.report_modes = report::kReportModes;
+        collector.emplace(stream.source(), stream.sink(), report::collector_options(reader.frame_count()));
+    }
+    TransformStream transformed(transform, collector ? collector->source() : stream.source(),
+                                collector ? collector->sink() : stream.sink(), settings, options.input,
+                                options.method_options);
     denoise::Report report =
         run_segmented(segments, transformed.source(), transformed.sink(), settings, context.progress());
     sink.commit();
@@ -259,6 +298,8 @@ int run_denoise(const DenoiseOptions& options)
         }
         io::write_text_file((std::filesystem::path(options.save_modes) / "temporal_modes.csv").string(), csv);
     }
+    if (collector)
+        write_denoise_report(options, reader, *collector, report, segments, input.frames, seconds);
     if (!options.json_path.empty()) {
         nlohmann::ordered_json json = summary_json(options, reader, report, seconds, frames_written, max_memory_bytes);
         json["color"] = color_json(color);
@@ -306,6 +347,10 @@ Subcommand add_denoise_command(CLI::App& parent)
     command->add_option("--json", options->json_path, "Write a JSON summary: N and why, spectrum, counts, timings");
     command->add_option("--save-modes", options->save_modes,
                         "Write the spatial modes (mode.NN.exr) and temporal weights (CSV, JSON) to this directory");
+    command->add_option("--report", options->report_path,
+                        "Write one self-contained HTML report (opens offline; images embedded as PNG data: URIs): "
+                        "spectrum and rank reasoning, temporal weights, spatial modes, a rank slider, "
+                        "noisy/denoised/sigma side by side with zoom and exposure, per-frame error, counts, timings");
     command->add_flag("--no-firefly-clamp", options->no_firefly_clamp,
                       "Keep fireflies as they are (default: clamp them, spreading their energy over the pixel's "
                       "frames)");

@@ -8,6 +8,8 @@
 // equivalent spp and the equal-quality speed-up as DESIGN.md defines them.
 // The contact sheet goes through the OCIO config's display/view.
 #include "app/command.h"
+#include "app/report/denoise_report.h"
+#include "app/report/html_report.h"
 #include "app/run_context.h"
 #include "core/common/error.h"
 #include "core/refine/equal_quality.h"
@@ -15,6 +17,7 @@
 #include "io/color_management.h"
 #include "io/contact_sheet.h"
 #include "io/frame_output.h"
+#include "io/mask_image.h"
 #include "io/sequence.h"
 #include "io/sequence_reader.h"
 #include "io/text_output.h"
@@ -27,6 +30,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <optional>
 
 namespace modestack::app {
 namespace {
@@ -145,6 +149,46 @@ std::string sequence_path(const RunOptions& options, const std::string& kind)
     return (stdfs::path(options.directory) / kind / (options.scene + ".####.exr")).string();
 }
 
+// A frame of `reader` box-downsampled like the report's other panels.
+app::report::LinearImage report_panel(const std::vector<float>& values, int width, int height, int channels,
+                                      int factor)
+{
+    app::report::BoxImage box(width, height, channels, factor);
+    for (int y = 0; y < height; ++y)
+        box.add_row(y, values.data() + static_cast<std::size_t>(y) * width * channels);
+    return box.mean();
+}
+
+// The denoise stage's report page completed with what only `run` knows: the
+// refined frames and refine masks of the shown frames, the true error when there
+// is a reference, every stage's time and run's own command line.
+void complete_report(app::report::ReportData& data, const RunOptions& options, const io::SequenceReader& refined,
+                     const io::FrameSequence& masks, const std::vector<std::vector<std::vector<double>>>& errors,
+                     const Json& seconds)
+{
+    data.title = fmt::format("modestack run: scene {}", options.scene);
+    data.command = command_line();
+    for (app::report::ShownFrame& frame : data.shown) {
+        const int width = refined.width(), height = refined.height();
+        std::vector<float> refined_rgb = read_frame(refined, frame.index);
+        std::vector<std::uint8_t> mask = io::read_mask(masks.files.at(frame.index), width, height);
+        std::vector<float> mask_values(mask.begin(), mask.end());
+        auto at = frame.panels.begin() + std::min<std::ptrdiff_t>(2, static_cast<std::ptrdiff_t>(frame.panels.size()));
+        frame.panels.insert(at, {"refined", report_panel(refined_rgb, width, height, 3, data.panel_factor)});
+        frame.panels.push_back({"refine mask", report_panel(mask_values, width, height, 1, data.panel_factor)});
+    }
+    if (!errors[0][0].empty()) {
+        data.errors.push_back({"true (against the reference): denoised", errors[0][1]});
+        data.errors.push_back({"true (against the reference): refined", errors[0][2]});
+    }
+    data.notes.push_back("Denoised: the DiffInd layer (the only one run denoises); refined: the same layer after "
+                         "re-rendering the unsure pixels.");
+    data.seconds.clear();
+    for (const char* stage : {"render", "denoise", "refine", "composite", "reference"})
+        if (seconds.contains(stage))
+            data.seconds.push_back({fmt::format("run: {}", stage), seconds[stage].get<double>()});
+}
+
 // Frames shown on the contact sheet: four spread over the shot; for `switch` one
 // of them is the middle of the crossing, where the denoiser fails.
 std::vector<int> sheet_frame_indices(const std::vector<int>& frames, const std::string& scene)
@@ -213,9 +257,12 @@ int run_run(const RunOptions& options)
 
     stage_start = std::chrono::steady_clock::now();
     // The renderer writes scene-linear Rec.709, which the denoiser reads as such.
+    const std::string report_path = (directory / "report.html").string();
     run_stage({"denoise", noisy, "--frames", frame_range, "--layer", "DiffInd", "-o", denoised, "--json",
-               json_file("denoise.json"), "--ocio-config", color_config.path()},
+               json_file("denoise.json"), "--ocio-config", color_config.path(), "--report", report_path},
               options.common);
+    // The stage wrote its page already; run completes it below (with refine and the reference).
+    std::optional<app::report::ReportData> report_data = app::report::take_published_report();
     seconds["denoise"] = seconds_since(stage_start);
 
     stage_start = std::chrono::steady_clock::now();
@@ -289,7 +336,8 @@ int run_run(const RunOptions& options)
     summary["outputs"] = {
         {"noisy", noisy},     {"denoised", denoised},
         {"refined", refined}, {"final", final_path},
-        {"masks", masks},     {"contact_sheet", (directory / "contact_sheet.png").string()}};
+        {"masks", masks},     {"contact_sheet", (directory / "contact_sheet.png").string()},
+        {"report", report_path}};
 
     // Measurements against the reference, and the contact sheet.
     io::FrameSequence noisy_sequence = io::find_input_sequence(noisy, frame_range);
@@ -422,6 +470,11 @@ int run_run(const RunOptions& options)
                                             {"DiffInd", {errors[0][0][t], errors[0][1][t], errors[0][2][t]}},
                                             {"beauty", {errors[1][0][t], errors[1][1][t], errors[1][2][t]}}});
         summary["quality"] = quality;
+    }
+    if (report_data) {
+        complete_report(*report_data, options, final_indirect, io::find_input_sequence(masks, frame_range), errors,
+                        seconds);
+        app::report::write_report(report_path, *report_data);
     }
     summary["seconds"]["wall"] = seconds_since(start);
     io::write_text_file((directory / "summary.json").string(), summary.dump(2) + "\n");

@@ -1,5 +1,6 @@
 // The options of `denoise` that change the method itself (issue 8): --transform,
-// --non-negative, --non-negative-mode, --shrink, --segments and --train-frames. Adds them to the command,
+// --non-negative, --non-negative-mode, --shrink, --segments, --train-frames, --weight-smoothing
+// and --whiten. Adds them to the command,
 // checks their values and combinations before any work (usage errors, exit 2),
 // puts them into the engine's settings, wraps the engine's ends in the
 // transform's decorators (core/denoise/transform.h) and writes their JSON block.
@@ -8,6 +9,7 @@
 #include "core/denoise/engine.h"
 #include "core/denoise/segments.h"
 #include "core/denoise/transform.h"
+#include "core/denoise/whitening.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -25,6 +27,9 @@ struct MethodOptions {
     std::string shrink = "hard";
     std::string segments;     ///< "" = one part, "auto" or a list "1-30,31-60"
     std::string train_frames; ///< "" = all frames, else a frame range
+    bool weight_smoothing = false;    ///< --weight-smoothing (the default anyway)
+    bool no_weight_smoothing = false; ///< --no-weight-smoothing
+    std::string whiten = "off"; ///< auto, on or off
 };
 
 /// Adds the options to `command`.
@@ -59,24 +64,34 @@ SegmentRun plan_segments(const MethodOptions& options, const std::vector<int>& f
 denoise::Report run_segmented(SegmentRun& run, denoise::FrameSource& source, denoise::FrameSink& sink,
                               const denoise::Settings& settings, Progress& progress);
 
-/// The engine's ends with --transform in place: for log, ε is set from the mean
-/// of a few frames of `source`, and the floor of --non-negative to f(0).
+/// The engine's ends with --transform and --whiten in place: for log, ε is set
+/// from the mean of a few frames of `source`, and the floor of --non-negative to
+/// f(0); --whiten (auto: when `source` has a variance layer and no transform is
+/// asked) reads the variance layer once for its weights (core/denoise/whitening.h)
+/// and points settings.whitening at them.
 class TransformStream {
 public:
     /// `source` and `sink` must outlive this object; `input` names the shot in errors.
     TransformStream(const denoise::Transform& transform, denoise::FrameSource& source,
-                    denoise::FrameSink& sink, denoise::Settings& settings, const std::string& input);
+                    denoise::FrameSink& sink, denoise::Settings& settings, const std::string& input,
+                    const MethodOptions& options = {});
     denoise::FrameSource& source() { return m_transform_source ? *m_transform_source : m_source; }
     denoise::FrameSink& sink() { return m_inverse_sink ? *m_inverse_sink : m_sink; }
     const denoise::Transform& transform() const { return m_transform; }
     /// The sampled shot mean behind log's ε (0 when not needed).
     double shot_mean() const { return m_shot_mean; }
+    /// The whitening weights, when whitening is on.
+    const denoise::WhiteningWeights* whitening() const { return m_whitening ? &*m_whitening : nullptr; }
+    /// Why whitening is on or off, for the JSON summary.
+    const std::string& whitening_reason() const { return m_whitening_reason; }
 
 private:
     denoise::Transform m_transform;
     double m_shot_mean = 0;
     denoise::FrameSource& m_source;
     denoise::FrameSink& m_sink;
+    std::optional<denoise::WhiteningWeights> m_whitening;
+    std::string m_whitening_reason;
     std::optional<denoise::TransformSource> m_transform_source;
     std::optional<denoise::InverseTransformSink> m_inverse_sink;
 };

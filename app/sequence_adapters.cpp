@@ -1,6 +1,9 @@
 #include "app/sequence_adapters.h"
 
+#include "core/common/error.h"
+
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
 #include <filesystem>
 
@@ -50,6 +53,77 @@ const unsigned char* SequenceSource::native_rows(int frame_index, int row_begin,
         return nullptr;
     return native.bytes.data() +
            m_reader.native_pixel_bytes(frame_index) * m_reader.width() * static_cast<size_t>(row_begin - native.row_begin);
+}
+
+namespace {
+// The layer names tried for `kind`, best first; each entry is the selector list of one candidate.
+std::vector<std::vector<std::string>> auxiliary_candidates(denoise::Auxiliary kind,
+                                                           const std::vector<io::SelectedLayer>& layers)
+{
+    if (layers.empty())
+        return {};
+    if (kind == denoise::Auxiliary::Variance) {
+        std::vector<std::string> names;
+        for (const io::SelectedLayer& layer : layers)
+            names.push_back(layer.name + "Var");
+        return {names};
+    }
+    const std::string& first = layers.front().name;
+    const size_t dot = first.rfind('.');
+    const std::string prefix = dot == std::string::npos ? "" : first.substr(0, dot + 1);
+    switch (kind) {
+    case denoise::Auxiliary::Albedo: return {{prefix + "DiffCol"}, {prefix + "Denoising Albedo"}};
+    case denoise::Auxiliary::Normal: return {{prefix + "Normal"}, {prefix + "Denoising Normal"}};
+    default: return {{prefix + "Depth"}, {prefix + "Denoising Depth"}};
+    }
+}
+}  // namespace
+
+const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxiliary kind) const
+{
+    std::lock_guard<std::mutex> lock(m_auxiliary_mutex);
+    AuxiliaryInput& input = m_auxiliary[static_cast<size_t>(kind)];
+    if (input.looked)
+        return input;
+    input.looked = true;
+    for (const std::vector<std::string>& selectors : auxiliary_candidates(kind, m_reader.layers())) {
+        try {
+            auto reader = std::make_unique<io::SequenceReader>(m_reader.sequence(), selectors);
+            if (reader->width() != m_reader.width() || reader->height() != m_reader.height())
+                continue;
+            // A variance per selected channel, in the same component order.
+            if (kind == denoise::Auxiliary::Variance &&
+                reader->selected_channel_count() != m_reader.selected_channel_count())
+                continue;
+            input.layer = fmt::format("{}", fmt::join(selectors, ","));
+            input.channels = reader->selected_channel_count();
+            input.reader = std::move(reader);
+            return input;
+        } catch (const Error&) {
+            // Not in every frame (or not at all): try the next name.
+        }
+    }
+    return input;
+}
+
+int SequenceSource::auxiliary_channels(denoise::Auxiliary kind) const { return auxiliary(kind).channels; }
+
+std::string SequenceSource::auxiliary_layer(denoise::Auxiliary kind) const { return auxiliary(kind).layer; }
+
+void SequenceSource::read_auxiliary_rows(denoise::Auxiliary kind, int frame_index, int row_begin, int row_end,
+                                         float* destination)
+{
+    const AuxiliaryInput& input = auxiliary(kind);
+    if (!input.reader)
+        throw internal_error("an auxiliary layer was read that the input does not have");
+    input.reader->read_selected(frame_index, row_begin, row_end, destination);
+}
+
+void SequenceSource::release_auxiliary(denoise::Auxiliary kind)
+{
+    std::lock_guard<std::mutex> lock(m_auxiliary_mutex);
+    m_auxiliary[static_cast<size_t>(kind)].reader.reset();
+    m_auxiliary[static_cast<size_t>(kind)].channels = 0;
 }
 
 SequenceSink::SequenceSink(const io::SequenceReader& reader, std::vector<std::string> outputs,

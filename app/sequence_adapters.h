@@ -1,5 +1,6 @@
 // Adapters between io's files and the denoise engine's stream ends: the source
-// reads selected channels of an opened input sequence; the sink writes each
+// reads selected channels of an opened input sequence (and auxiliary layers, a
+// variance or guides, found by name next to them); the sink writes each
 // output frame (every input channel copied, the selected ones replaced, sigma
 // channels appended) and, if asked, the spatial modes.
 #pragma once
@@ -8,8 +9,10 @@
 #include "io/frame_output.h"
 #include "io/sequence_reader.h"
 
+#include <array>
 #include <cstdint>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -25,6 +28,19 @@ public:
     denoise::ShotShape shape() const override;
     void read_rows(int frame_index, int row_begin, int row_end, float* destination) override;
     std::int64_t band_bytes_per_row() const override;
+    /// Auxiliary layers are found by name next to the first selected layer `L`
+    /// (prefix `P.` of `P.L`, none for a bare `L`): Variance `<L>Var` for each
+    /// selected layer (our renderer's `DiffIndVar`), Albedo `P.DiffCol` or
+    /// `P.Denoising Albedo`, Normal `P.Normal` or `P.Denoising Normal`, Depth
+    /// `P.Depth` or `P.Denoising Depth`. The first query of a kind opens the
+    /// sequence again for its layer; 0 when no frame-consistent layer is found.
+    int auxiliary_channels(denoise::Auxiliary kind) const override;
+    void read_auxiliary_rows(denoise::Auxiliary kind, int frame_index, int row_begin, int row_end,
+                             float* destination) override;
+    /// The layer found for `kind` ("" = none).
+    std::string auxiliary_layer(denoise::Auxiliary kind) const;
+    /// Closes the files opened for `kind` (after a pre-pass that was their only use).
+    void release_auxiliary(denoise::Auxiliary kind);
 
     /// Starts keeping the native rows of each read of a frame with pass-through channels.
     void keep_native_rows() { m_keeping = true; }
@@ -38,9 +54,19 @@ private:
         int row_end = 0;
         std::vector<unsigned char> bytes;
     };
+    struct AuxiliaryInput {
+        bool looked = false;
+        std::string layer;
+        int channels = 0;
+        std::unique_ptr<io::SequenceReader> reader;
+    };
+    const AuxiliaryInput& auxiliary(denoise::Auxiliary kind) const;
+
     const io::SequenceReader& m_reader;
     bool m_keeping = false;
     std::vector<NativeRows> m_native;  // per frame
+    mutable std::mutex m_auxiliary_mutex;
+    mutable std::array<AuxiliaryInput, 4> m_auxiliary;  // by denoise::Auxiliary
 };
 
 /// FrameSink writing one output file per input frame.

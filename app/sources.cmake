@@ -12,4 +12,10 @@ target_sources(modestack PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/color_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/memory_budget.cpp
   ${CMAKE_CURRENT_LIST_DIR}/method_options.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/option_values.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/option_values.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/report/report_collector.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/report/image_encoding.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/report/svg_plot.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/report/report_page.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/report/html_report.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/report/denoise_report.cpp)

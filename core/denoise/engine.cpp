@@ -106,6 +106,9 @@ private:
             throw usage_error("--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
         if (!m_settings.training_frames.empty())
             check_training_frames(m_settings, m_shape.frames);
+        if (m_settings.whitening &&
+            m_settings.whitening->size() != static_cast<size_t>(m_shape.width) * m_shape.height * m_shape.channels)
+            throw internal_error("the whitening weights do not match the shot");
     }
 
     // Reads rows [row_begin, row_end) of every frame (frames in parallel) and cleans them.
@@ -192,15 +195,42 @@ private:
         }
     }
 
+    // --whiten (whitening.h): hands `use` the chunk's sample rows scaled by their
+    // weights, for the modes only, one image row at a time so that the copy stays
+    // 1/kChunkRows of a band; without weights the chunk itself.
+    template <typename Use>
+    void visit_whitened(const Band& band, const lowrank::BandView& chunk, std::vector<float>& scratch, Use&& use) const
+    {
+        if (!m_settings.whitening) {
+            use(chunk);
+            return;
+        }
+        const std::vector<float>& weights = *m_settings.whitening;
+        const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
+        const std::int64_t chunk_first = static_cast<std::int64_t>(band.row_begin) * row_samples + (chunk.data - band.data);
+        scratch.resize(static_cast<size_t>(row_samples) * m_shape.frames);
+        for (std::int64_t begin = 0; begin < chunk.rows; begin += row_samples) {
+            for (int t = 0; t < m_shape.frames; ++t)
+                for (std::int64_t i = 0; i < row_samples; ++i)
+                    scratch[static_cast<size_t>(t * row_samples + i)] =
+                        chunk.data[t * chunk.frame_stride + begin + i] *
+                        weights[static_cast<size_t>(chunk_first + begin + i)];
+            use(lowrank::BandView{scratch.data(), row_samples, m_shape.frames, row_samples});
+        }
+    }
+
     lowrank::Basis gram_basis()
     {
         const bool training = !m_settings.training_frames.empty();  // --train-frames: training.h
         lowrank::GramAccumulator gram(training ? 1 : m_shape.frames);
         if (training)
             m_training.emplace(m_shape.frames, m_settings.training_frames);
+        std::vector<float> scratch;
         for_each_band([&](Band& band) {
             for_each_chunk(band, [&](const lowrank::BandView& chunk) {
-                training ? m_training->add(chunk) : gram.add(chunk);
+                visit_whitened(band, chunk, scratch, [&](const lowrank::BandView& rows) {
+                    training ? m_training->add(rows) : gram.add(rows);
+                });
             });
         });
         auto start = Clock::now();
@@ -213,7 +243,10 @@ private:
     lowrank::Basis randomized_basis()
     {
         lowrank::BandPass pass = [&](const std::function<void(const lowrank::BandView&)>& visit) {
-            for_each_band([&](Band& band) { for_each_chunk(band, visit); });
+            std::vector<float> scratch;
+            for_each_band([&](Band& band) {
+                for_each_chunk(band, [&](const lowrank::BandView& chunk) { visit_whitened(band, chunk, scratch, visit); });
+            });
         };
         int modes = std::min(m_shape.frames - 1, std::max(m_settings.randomized_modes,
                                                           m_settings.rank.rule == lowrank::RankRule::Fixed
@@ -237,6 +270,18 @@ private:
             for (int t = 0; t < m_shape.frames; ++t)
                 weights[t] = temporal(t, j);
             m_report.temporal_modes.push_back(weights);
+        }
+        if (m_settings.report_modes <= 0)
+            return;
+        const int preview =
+            std::min({std::max(2 * rank, m_settings.report_modes), m_shape.frames - 1, basis.modes()});
+        const Eigen::MatrixXd preview_temporal = m_training ? m_training->temporal_modes(basis, preview)
+                                                            : Eigen::MatrixXd(basis.temporal.leftCols(preview));
+        for (int j = 0; j < preview; ++j) {
+            std::vector<double> weights(m_shape.frames);
+            for (int t = 0; t < m_shape.frames; ++t)
+                weights[t] = preview_temporal(t, j);
+            m_report.preview_temporal_modes.push_back(weights);
         }
     }
 
@@ -336,8 +381,14 @@ private:
         const BandPlan& plan = m_report.plan;
         // With training frames the projection (A) and the rebuild (B) differ: training.h.
         Eigen::MatrixXd temporal = m_training ? m_training->weights(basis, rank) : basis.temporal.leftCols(rank);
-        Eigen::VectorXd leverages = m_training ? training_leverages(m_training->projector(basis, rank), temporal)
-                                               : lowrank::leverages(basis, rank);
+        const bool smooth = m_settings.weight_smoothing.enabled;  // --weight-smoothing: B smoothed, A kept
+        if (smooth)
+            temporal = smooth_temporal_weights(temporal, m_settings.weight_smoothing, m_report.weight_smoothing);
+        Eigen::VectorXd leverages =
+            m_training || smooth
+                ? training_leverages(m_training ? m_training->projector(basis, rank) : basis.temporal.leftCols(rank),
+                                     temporal)
+                : lowrank::leverages(basis, rank);
         int frames = m_shape.frames;
         std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
         lowrank::ConfidenceOptions confidence;

@@ -16,6 +16,7 @@
 #include "core/denoise/frame_stream.h"
 #include "core/denoise/mode_filter.h"
 #include "core/denoise/non_negative.h"
+#include "core/denoise/weight_smoothing.h"
 #include "core/lowrank/outliers.h"
 #include "core/lowrank/randomized_svd.h"
 #include "core/lowrank/rank_rule.h"
@@ -61,6 +62,15 @@ struct Settings {
     /// --train-frames: ascending frame indices the modes are computed from (empty:
     /// all); every frame is projected on them (training.h). Gram solver, no mode filter.
     std::vector<int> training_frames;
+    /// --weight-smoothing: smooth each rebuilt mode's temporal weights over time
+    /// (weight_smoothing.h).
+    WeightSmoothingOptions weight_smoothing;
+    /// --whiten: a weight per sample of the image ([row][x][channel]); the modes come
+    /// from the weighted rows, everything else from the rows as read (whitening.h).
+    const std::vector<float>* whitening = nullptr;
+    /// --report: also report pt(t, j) for j < max(2N, report_modes), capped at F − 1
+    /// and at the modes found (Report::preview_temporal_modes, the rank slider); 0: none.
+    int report_modes = 0;
 };
 
 /// What a run did and found, for the JSON summary and the report.
@@ -73,10 +83,13 @@ struct Report {
     std::vector<double> singular_values;  ///< σ_j, descending
     std::vector<double> explained;        ///< σ_j² / total energy, per mode
     std::vector<std::vector<double>> temporal_modes;  ///< pt(t, j) for j < N: [j][t]
+    /// pt(t, j) beyond N for the report's rank slider (Settings::report_modes): [j][t].
+    std::vector<std::vector<double>> preview_temporal_modes;
     lowrank::OutlierCounts outliers;
     ModeFilterPlan mode_filter;     ///< per-mode filters and SURE (empty when off)
     NonNegativeCounts non_negative;      ///< what --non-negative changed
     std::vector<double> shrinkage;       ///< per kept mode η(σ_j)/σ_j (empty: hard truncation)
+    WeightSmoothingPlan weight_smoothing;  ///< what --weight-smoothing did per kept mode
     double seconds_filter_survey = 0;  ///< the mode filter's SURE pass
     double seconds_statistics = 0;  ///< pass 1 (read + clean + Gram)
     double seconds_solve = 0;       ///< eigensolve or randomized SVD, and the rank rule

@@ -1,5 +1,6 @@
 // The two ends the denoise engine talks to, so that it knows nothing of files:
-// a FrameSource hands out rows of the selected channels of every frame, a
+// a FrameSource hands out rows of the selected channels of every frame (and of
+// auxiliary channels such as a variance layer, when the input has them), a
 // FrameSink receives the rebuilt rows and their sigma. The app adapts io's
 // SequenceReader and FrameOutput to them; tests use plain memory.
 #pragma once
@@ -17,6 +18,15 @@ struct ShotShape {
     int channels = 0;  ///< selected channels per pixel (3 per RGB layer)
 };
 
+/// Per-pixel channels an input may hold next to the selected ones, which the
+/// method can use but does not denoise.
+enum class Auxiliary {
+    Variance,  ///< variance of each selected channel's pixel mean (our renderer's `DiffIndVar`)
+    Albedo,    ///< surface colour (`DiffCol`)
+    Normal,    ///< shading normal (`Normal`)
+    Depth,     ///< camera distance (`Depth`)
+};
+
 /// Rows of the selected channels of a shot.
 class FrameSource {
 public:
@@ -28,6 +38,19 @@ public:
     /// Bytes the source itself keeps per image row of a streamed band, all frames
     /// together (e.g. decoded rows it hands to the sink), for the memory plan.
     virtual std::int64_t band_bytes_per_row() const { return 0; }
+    /// Channels per pixel of `kind` (0: the input has none; Variance has one per
+    /// selected channel).
+    virtual int auxiliary_channels(Auxiliary kind) const
+    {
+        (void)kind;
+        return 0;
+    }
+    /// Reads rows of `kind` like read_rows, [row][x][channel]; only for a kind
+    /// with channels. Called concurrently for different frames.
+    virtual void read_auxiliary_rows(Auxiliary kind, int frame_index, int row_begin, int row_end, float* destination)
+    {
+        (void)kind, (void)frame_index, (void)row_begin, (void)row_end, (void)destination;
+    }
 };
 
 /// A FrameSource that hands on another's rows unchanged: decorators derive from
@@ -42,6 +65,11 @@ public:
         m_inner.read_rows(frame_index, row_begin, row_end, destination);
     }
     std::int64_t band_bytes_per_row() const override { return m_inner.band_bytes_per_row(); }
+    int auxiliary_channels(Auxiliary kind) const override { return m_inner.auxiliary_channels(kind); }
+    void read_auxiliary_rows(Auxiliary kind, int frame_index, int row_begin, int row_end, float* destination) override
+    {
+        m_inner.read_auxiliary_rows(kind, frame_index, row_begin, row_end, destination);
+    }
 
 protected:
     FrameSource& m_inner;

@@ -65,6 +65,11 @@ public:
         m_inner.read_rows(m_segment.first + frame_index, row_begin, row_end, destination);
     }
     std::int64_t band_bytes_per_row() const override;
+    int auxiliary_channels(Auxiliary kind) const override { return m_inner.auxiliary_channels(kind); }
+    void read_auxiliary_rows(Auxiliary kind, int frame_index, int row_begin, int row_end, float* destination) override
+    {
+        m_inner.read_auxiliary_rows(kind, m_segment.first + frame_index, row_begin, row_end, destination);
+    }
 
 private:
     FrameSource& m_inner;

@@ -6,4 +6,6 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/non_negative.cpp
   ${CMAKE_CURRENT_LIST_DIR}/segments.cpp
   ${CMAKE_CURRENT_LIST_DIR}/training.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/transform.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/transform.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/weight_smoothing.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/whitening.cpp)

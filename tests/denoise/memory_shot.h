@@ -16,11 +16,23 @@ namespace modestack::denoise::testing {
 struct MemoryShot : FrameSource {
     ShotShape size;
     std::vector<std::vector<float>> frames;
+    /// Optional auxiliary layer: the variance of each sample, frames like `frames`.
+    std::vector<std::vector<float>> variance;
     ShotShape shape() const override { return size; }
     void read_rows(int frame, int row_begin, int row_end, float* destination) override
     {
         std::size_t row = static_cast<std::size_t>(size.width) * size.channels;
         std::copy(frames[frame].begin() + row_begin * row, frames[frame].begin() + row_end * row, destination);
+    }
+    int auxiliary_channels(Auxiliary kind) const override
+    {
+        return kind == Auxiliary::Variance && !variance.empty() ? size.channels : 0;
+    }
+    void read_auxiliary_rows(Auxiliary kind, int frame, int row_begin, int row_end, float* destination) override
+    {
+        REQUIRE(auxiliary_channels(kind) > 0);
+        std::size_t row = static_cast<std::size_t>(size.width) * size.channels;
+        std::copy(variance[frame].begin() + row_begin * row, variance[frame].begin() + row_end * row, destination);
     }
 };
 

@@ -2,7 +2,9 @@
 // real binary on a tiny sequence: --transform round-trips a static shot and is
 // recorded, --non-negative leaves no negative value and counts its changes,
 // --shrink optimal reports its factors, --segments splits by a list and finds a
-// planted cut; bad values and combinations exit 2 with one line naming the
+// planted cut, --weight-smoothing lowers flicker and keeps a lighting step,
+// --whiten finds a Cycles-style variance layer and keeps a quiet region's mode;
+// bad values and combinations exit 2 with one line naming the
 // option and write nothing.
 #include "tests/tools/testkit.h"
 
@@ -210,6 +212,128 @@ TEST_CASE("denoise --train-frames: modes from every 3rd frame, every frame writt
     CHECK(trained_error < 0.1 * 0.1 * 0.75);
 }
 
+TEST_CASE("denoise --weight-smoothing (default): less flicker against the truth, the lighting step kept, per part")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), cut_value);
+    std::string input = "denoise " + dir.file("in.####.exr") + " -q --no-mode-filter --rank 4 ";
+    auto off_run = run_modestack(input + "--no-weight-smoothing --json " + dir.file("off.json") + " -o " +
+                                 dir.file("off/d.####.exr"));
+    REQUIRE_MESSAGE(off_run.exit_code == 0, off_run.err);
+    CHECK(load_json(dir.file("off.json"))["method"]["weight_smoothing"]["enabled"] == false);
+    auto result = run_modestack(input + "--json " + dir.file("w.json") + " -o " + dir.file("on/d.####.exr"));
+    REQUIRE_MESSAGE(result.exit_code == 0, result.err);
+    auto smoothing = load_json(dir.file("w.json"))["method"]["weight_smoothing"];
+    CHECK(smoothing["enabled"] == true);
+    REQUIRE(smoothing["modes"].size() == 4);
+    for (const auto& mode : smoothing["modes"])
+        CHECK(mode["sure_gain"].get<double>() >= 0);
+    // Flicker against the clean shot, and the step of the bottom half at kCut.
+    auto truth = [](int frame, int x, int y, int c) {
+        return clean_value(frame, x, y, c) + (frame >= kCut && y >= kHeight / 2 ? 1.5f : 0.0f);
+    };
+    auto measure = [&](const std::string& pattern, double& flicker, double& step) {
+        std::vector<float> values = all_values(pattern);
+        const size_t frame_samples = size_t(kWidth) * kHeight * 3;
+        flicker = 0, step = 0;
+        for (int frame = 2; frame <= kFrames; ++frame)
+            for (int y = 0; y < kHeight; ++y)
+                for (int x = 0; x < kWidth; ++x)
+                    for (int c = 0; c < 3; ++c) {
+                        const size_t i = (size_t(frame - 1) * kHeight * kWidth + size_t(y) * kWidth + x) * 3 + c;
+                        const double change = values[i] - values[i - frame_samples];
+                        const double error = change - (truth(frame, x, y, c) - truth(frame - 1, x, y, c));
+                        flicker += error * error;
+                        if (frame == kCut && y >= kHeight / 2)
+                            step += change / (kHeight / 2 * kWidth * 3);
+                    }
+        flicker /= (kFrames - 1) * frame_samples;
+    };
+    double off_flicker = 0, off_step = 0, on_flicker = 0, on_step = 0;
+    measure(dir.file("off/d.%04d.exr"), off_flicker, off_step);
+    measure(dir.file("on/d.%04d.exr"), on_flicker, on_step);
+    MESSAGE("flicker off " << off_flicker << ", on " << on_flicker << "; step off " << off_step << ", on "
+                           << on_step);
+    CHECK(on_flicker < off_flicker);
+    CHECK(on_step == doctest::Approx(1.5).epsilon(0.05));
+    // With --segments each part smooths its own weights.
+    auto parts = run_modestack("denoise " + dir.file("in.####.exr") +
+                               " -q --no-mode-filter --rank 2 --segments 1-6,7-12 --json " +
+                               dir.file("p.json") + " -o " + dir.file("p/d.####.exr"));
+    REQUIRE_MESSAGE(parts.exit_code == 0, parts.err);
+    auto segments = load_json(dir.file("p.json"))["method"]["segments"]["parts"];
+    REQUIRE(segments.size() == 2);
+    CHECK(segments[1]["weight_smoothing_widths"].size() == 2);
+}
+
+TEST_CASE("denoise --whiten: found by name in Cycles-style layers, keeps the quiet half's weak mode")
+{
+    // Left half: bright and noisy (0.5); right half: dim, quiet (0.02) and a weak
+    // mode of its own that the left half's noise modes hide from hard truncation.
+    constexpr float noisy_deviation = 0.5f, quiet_deviation = 0.02f;
+    auto truth = [](int frame, int x, int y, int c) {
+        const float time = static_cast<float>(frame) / kFrames;
+        if (x < kWidth / 2)
+            return 4.0f + 2.0f * std::sin(0.2f * y + c) * std::cos(3.0f * time);
+        return 0.3f + 0.1f * std::cos(0.4f * x + 0.3f * y + c) * std::sin(5.0f * time + 1.0f);
+    };
+    auto deviation = [&](int x) { return x < kWidth / 2 ? noisy_deviation : quiet_deviation; };
+    testkit::ExrLayout variance_layout = layout();
+    variance_layout.channel_names = {"ViewLayer.DiffInd.B",    "ViewLayer.DiffInd.G",    "ViewLayer.DiffInd.R",
+                                     "ViewLayer.DiffIndVar.B", "ViewLayer.DiffIndVar.G", "ViewLayer.DiffIndVar.R"};
+    variance_layout.channel_types.assign(6, "float");
+    TempDir dir;
+    testkit::write_sequence(dir.file("v.%04d.exr"), all_frames(), variance_layout, [&](int frame, int x, int y, int c) {
+        if (c >= 3)
+            return deviation(x) * deviation(x);
+        return truth(frame, x, y, 2 - c) + deviation(x) / 0.1f * noise(frame, x, y, c);
+    });
+    std::string input = "denoise " + dir.file("v.####.exr") + " -q --layer DiffInd --no-mode-filter --rank 3 ";
+    auto off = run_modestack(input + "--json " + dir.file("off.json") + " -o " + dir.file("off/d.####.exr"));
+    REQUIRE_MESSAGE(off.exit_code == 0, off.err);
+    auto on = run_modestack(input + "--whiten auto --json " + dir.file("on.json") + " -o " + dir.file("on/d.####.exr"));
+    REQUIRE_MESSAGE(on.exit_code == 0, on.err);
+    auto whiten = load_json(dir.file("on.json"))["method"]["whiten"];
+    CHECK(whiten["mode"] == "on");
+    CHECK(whiten["reason"] == "variance layer");
+    CHECK(whiten["weight_max"].get<double>() / whiten["weight_min"].get<double>() ==
+          doctest::Approx(noisy_deviation / quiet_deviation).epsilon(1e-4));
+    CHECK(load_json(dir.file("off.json"))["method"]["whiten"]["mode"] == "off");
+    auto quiet_error = [&](const std::string& pattern) {
+        double sum = 0;
+        int count = 0;
+        for (int frame = 1; frame <= kFrames; ++frame) {
+            char name[4096];
+            std::snprintf(name, sizeof name, pattern.c_str(), frame);
+            std::vector<float> values =
+                testkit::read_channels(name, {"ViewLayer.DiffInd.R", "ViewLayer.DiffInd.G", "ViewLayer.DiffInd.B"});
+            for (int y = 0; y < kHeight; ++y)
+                for (int x = kWidth / 2 + 1; x < kWidth; ++x)
+                    for (int c = 0; c < 3; ++c, ++count) {
+                        const double error = values[(size_t(y) * kWidth + x) * 3 + c] - truth(frame, x, y, c);
+                        sum += error * error;
+                    }
+        }
+        return sum / count;
+    };
+    const double off_error = quiet_error(dir.file("off/d.%04d.exr")), on_error = quiet_error(dir.file("on/d.%04d.exr"));
+    MESSAGE("quiet half MSE: plain " << off_error << ", whitened " << on_error << " (noise variance "
+                                     << quiet_deviation * quiet_deviation << ")");
+    CHECK(on_error < off_error / 2);
+
+    // No variance layer: auto stays off and says why; on is an input error.
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    auto plain = run_modestack("denoise " + dir.file("in.####.exr") + " -q --whiten auto --json " +
+                               dir.file("p.json") + " -o " + dir.file("p/d.####.exr"));
+    REQUIRE_MESSAGE(plain.exit_code == 0, plain.err);
+    CHECK(load_json(dir.file("p.json"))["method"]["whiten"]["reason"] == "no variance layer");
+    auto refused = run_modestack("denoise " + dir.file("in.####.exr") + " -q --whiten on -o " +
+                                 dir.file("r/d.####.exr"));
+    CHECK(refused.exit_code == 1);
+    CHECK(refused.err.find("--whiten on needs a variance layer") != std::string::npos);
+    CHECK_FALSE(std::ifstream(dir.file("r/d.0001.exr")).good());
+}
+
 TEST_CASE("denoise method options: bad values and combinations exit 2 with one line, nothing written")
 {
     TempDir dir;
@@ -238,6 +362,9 @@ TEST_CASE("denoise method options: bad values and combinations exit 2 with one l
         {"--no-mode-filter --train-frames 10-20", "--train-frames '10-20': frame 13 is not in the shot"},
         {"--no-mode-filter --train-frames 1,2", "--train-frames gives 2 frames"},
         {"--no-mode-filter --train-frames 1-12x4 --rank 3", "--rank 3 needs more than 3 training frames"},
+        {"--whiten maybe", "--whiten 'maybe'"},
+        {"--weight-smoothing --no-weight-smoothing", "--weight-smoothing and --no-weight-smoothing contradict"},
+        {"--whiten on --transform log", "--whiten on cannot be combined with --transform log"},
     };
     for (const Case& c : cases) {
         CAPTURE(c.arguments);

@@ -1,0 +1,47 @@
+// Glue between `modestack denoise` and the report: the collector's options for
+// a shot, the ReportData of a finished run (one engine run, or one per
+// --segments part), the early check of the --report path, and the hand-over of
+// that data to `modestack run`, which runs denoise in its own process and then
+// adds the refined frames, refine masks and true error to the same page.
+#pragma once
+
+#include "app/report/report_collector.h"
+#include "app/report/report_data.h"
+#include "core/denoise/engine.h"
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace modestack::app::report {
+
+/// Temporal modes the engine reports for the rank slider: N_max = max(2N, this), at most F − 1.
+constexpr int kReportModes = 8;
+
+/// What the collector keeps for a shot of `frames` frames.
+CollectorOptions collector_options(int frames);
+
+/// One engine run over frames [first, first + count) of the shot.
+struct EngineRun {
+    int first = 0;
+    int count = 0;
+    const denoise::Report* report = nullptr;
+};
+
+/// The page's data from the collector and the engine runs (in frame order):
+/// spectrum, rank decision and preview modes per run, shown frames, estimated
+/// error, counts and the engine's timings. Provenance (title, version, command,
+/// input, channel names) is left to the caller.
+ReportData gather_report(const Collector& collector, const std::vector<EngineRun>& runs,
+                         const std::vector<int>& frame_numbers);
+
+/// Checks before any work that `path` can be written and is not one of `inputs`:
+/// Error (bad input or usage) naming it otherwise.
+void check_report_path(const std::string& path, const std::vector<std::string>& inputs);
+
+/// Keeps `data` for publish's caller in this process (`modestack run`).
+void publish_report(ReportData data);
+/// The data the last denoise published (once), if any.
+std::optional<ReportData> take_published_report();
+
+}  // namespace modestack::app::report
