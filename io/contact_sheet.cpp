@@ -11,7 +11,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <system_error>
-#include <unistd.h>
 
 namespace modestack::io {
 namespace {

@@ -9,7 +9,6 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
-#include <atomic>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
