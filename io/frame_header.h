@@ -30,12 +30,6 @@ struct FrameHeader {
 /// is missing, not an image, or unreadable.
 FrameHeader read_frame_header(const std::string& file);
 
-/// Walks the first header of an OpenEXR `file` and throws Error (bad input)
-/// naming it when an attribute claims more bytes than the file has left, before
-/// OpenEXR would allocate that claim; an empty file is refused as such. Files it
-/// cannot walk are left to the reader.
-void check_exr_attribute_sizes(const std::string& file);
-
 /// "160x120" or "160x120+8+4" when the window does not start at 0,0.
 std::string describe_window(int x, int y, int width, int height);
 

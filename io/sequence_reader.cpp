@@ -6,7 +6,6 @@
 #include "io/frame_header.h"
 
 #include <Imath/half.h>
-#include <OpenImageIO/filesystem.h>
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -17,23 +16,10 @@ namespace {
 
 std::unique_ptr<detail::OpenFrame> open_frame(const std::string& file, int frame_number)
 {
-    if (OIIO::Filesystem::is_directory(file))
-        throw Error(ErrorKind::BadInput, "is a directory, not an image file", file, frame_number);
     auto frame = std::make_unique<detail::OpenFrame>();
     frame->file = file;
     frame->frame_number = frame_number;
-    try {
-        check_exr_attribute_sizes(file);
-    } catch (const Error& error) {  // name the frame too
-        throw Error(ErrorKind::BadInput, error.reason(), file, frame_number);
-    }
-    std::string reason;
-    frame->input = detail::open_image(file, reason);
-    if (!frame->input) {
-        throw Error(ErrorKind::BadInput,
-                    fmt::format("cannot read image header ({})", reason.empty() ? "unknown format" : reason), file,
-                    frame_number);
-    }
+    frame->input = detail::open_checked_image(file, frame_number);
     frame->spec = frame->input->spec();
     if (frame->spec.deep)
         throw Error(ErrorKind::BadInput, "deep images are not supported", file, frame_number);

@@ -2,6 +2,7 @@ target_sources(modestack_io PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/sequence.cpp
   ${CMAKE_CURRENT_LIST_DIR}/layers.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_header.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/detail/open_image.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sequence_reader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_output.cpp
   ${CMAKE_CURRENT_LIST_DIR}/text_output.cpp
