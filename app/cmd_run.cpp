@@ -10,14 +10,16 @@
 #include "app/command.h"
 #include "app/report/denoise_report.h"
 #include "app/report/html_report.h"
+#include "app/run_composite.h"
 #include "app/run_context.h"
+#include "app/run_quality.h"
+#include "app/run_report.h"
 #include "core/common/error.h"
 #include "core/refine/equal_quality.h"
 #include "core/scene/builtin_scenes.h"
 #include "io/color_management.h"
 #include "io/contact_sheet.h"
 #include "io/frame_output.h"
-#include "io/mask_image.h"
 #include "io/sequence.h"
 #include "io/sequence_reader.h"
 #include "io/text_output.h"
@@ -27,7 +29,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -86,59 +87,6 @@ Json read_json(const std::string& path)
     return Json::parse(stream);
 }
 
-std::vector<float> read_frame(const io::SequenceReader& reader, int frame_index)
-{
-    std::vector<float> values(static_cast<std::size_t>(reader.width()) * reader.height() *
-                              reader.selected_channel_count());
-    reader.read_selected(frame_index, 0, reader.height(), values.data());
-    return values;
-}
-
-// beauty = DiffCol × (DiffDir + DiffInd) + Emit from 12 interleaved channels per
-// pixel in that layer order; `indirect` overrides DiffInd when given (3 per pixel).
-std::vector<float> composite(const std::vector<float>& passes, const float* indirect)
-{
-    std::size_t pixels = passes.size() / 12;
-    std::vector<float> beauty(pixels * 3);
-    for (std::size_t p = 0; p < pixels; ++p)
-        for (int c = 0; c < 3; ++c) {
-            const float* pass = passes.data() + p * 12;
-            float diffuse_indirect = indirect ? indirect[p * 3 + c] : pass[6 + c];
-            beauty[p * 3 + c] = pass[c] * (pass[3 + c] + diffuse_indirect) + pass[9 + c];
-        }
-    return beauty;
-}
-
-const std::vector<std::string> kPassLayers{"DiffCol", "DiffDir", "DiffInd", "Emit"};
-
-// The final sequence: the refined frames with Combined.RGB recomposited.
-void write_final(const io::FrameSequence& refined, const io::FrameSequence& final_sequence,
-                 Progress& progress)
-{
-    io::SequenceReader beauty(refined, {"Combined"});
-    io::SequenceReader passes(refined, kPassLayers);
-    std::vector<io::HeaderAttribute> attributes{
-        io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
-        io::HeaderAttribute::of_text("modestack:command", command_line()),
-        io::HeaderAttribute::of_text("modestack:composite",
-                                     "Combined = DiffCol * (DiffDir + DiffInd) + Emit"),
-    };
-    std::vector<std::unique_ptr<io::FrameOutput>> outputs;
-    std::vector<unsigned char> native;
-    progress.begin("compositing the final beauty", beauty.frame_count());
-    for (int i = 0; i < beauty.frame_count(); ++i) {
-        std::vector<float> rgb = composite(read_frame(passes, i), nullptr);
-        beauty.read_native(i, 0, beauty.height(), native);
-        outputs.push_back(std::make_unique<io::FrameOutput>(final_sequence.files[i], beauty, i,
-                                                            std::vector<std::string>{}, attributes));
-        outputs.back()->write_replaced_rows(0, beauty.height(), native, rgb.data(), nullptr);
-        progress.advance();
-    }
-    for (auto& output : outputs)
-        output->commit();
-    progress.end();
-}
-
 double seconds_since(std::chrono::steady_clock::time_point start)
 {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -147,46 +95,6 @@ double seconds_since(std::chrono::steady_clock::time_point start)
 std::string sequence_path(const RunOptions& options, const std::string& kind)
 {
     return (stdfs::path(options.directory) / kind / (options.scene + ".####.exr")).string();
-}
-
-// A frame of `reader` box-downsampled like the report's other panels.
-app::report::LinearImage report_panel(const std::vector<float>& values, int width, int height, int channels,
-                                      int factor)
-{
-    app::report::BoxImage box(width, height, channels, factor);
-    for (int y = 0; y < height; ++y)
-        box.add_row(y, values.data() + static_cast<std::size_t>(y) * width * channels);
-    return box.mean();
-}
-
-// The denoise stage's report page completed with what only `run` knows: the
-// refined frames and refine masks of the shown frames, the true error when there
-// is a reference, every stage's time and run's own command line.
-void complete_report(app::report::ReportData& data, const RunOptions& options, const io::SequenceReader& refined,
-                     const io::FrameSequence& masks, const std::vector<std::vector<std::vector<double>>>& errors,
-                     const Json& seconds)
-{
-    data.title = fmt::format("modestack run: scene {}", options.scene);
-    data.command = command_line();
-    for (app::report::ShownFrame& frame : data.shown) {
-        const int width = refined.width(), height = refined.height();
-        std::vector<float> refined_rgb = read_frame(refined, frame.index);
-        std::vector<std::uint8_t> mask = io::read_mask(masks.files.at(frame.index), width, height);
-        std::vector<float> mask_values(mask.begin(), mask.end());
-        auto at = frame.panels.begin() + std::min<std::ptrdiff_t>(2, static_cast<std::ptrdiff_t>(frame.panels.size()));
-        frame.panels.insert(at, {"refined", report_panel(refined_rgb, width, height, 3, data.panel_factor)});
-        frame.panels.push_back({"refine mask", report_panel(mask_values, width, height, 1, data.panel_factor)});
-    }
-    if (!errors[0][0].empty()) {
-        data.errors.push_back({"true (against the reference): denoised", errors[0][1]});
-        data.errors.push_back({"true (against the reference): refined", errors[0][2]});
-    }
-    data.notes.push_back("Denoised: the DiffInd layer (the only one run denoises); refined: the same layer after "
-                         "re-rendering the unsure pixels.");
-    data.seconds.clear();
-    for (const char* stage : {"render", "denoise", "refine", "composite", "reference"})
-        if (seconds.contains(stage))
-            data.seconds.push_back({fmt::format("run: {}", stage), seconds[stage].get<double>()});
 }
 
 // Frames shown on the contact sheet: four spread over the shot; for `switch` one
@@ -354,7 +262,6 @@ int run_run(const RunOptions& options)
         reference_indirect =
             std::make_unique<io::SequenceReader>(reference_sequence, std::vector<std::string>{"DiffInd"});
     }
-    const char* kVersions[] = {"noisy", "denoised", "refined"};
     // [layer 0 = DiffInd, 1 = beauty][version][frame]
     std::vector<std::vector<std::vector<double>>> errors(2, std::vector<std::vector<double>>(3));
     std::vector<int> sheet = sheet_frame_indices(frames, options.scene);
@@ -411,68 +318,13 @@ int run_run(const RunOptions& options)
                                 {"exposure", options.exposure}};
 
     if (reference_beauty) {
-        // Time model t(s) = t0 + k·s per frame from the noisy and reference renders.
         Json reference_json = read_json(json_file("reference.json"));
-        double frame_count = static_cast<double>(frames.size());
-        double t_noisy = render_json["render_seconds"].get<double>() / frame_count;
-        double t_reference = reference_json["render_seconds"].get<double>() / frame_count;
-        refine::TimeModel time_model =
-            refine::fit_time_model(options.spp, t_noisy, options.reference_spp, t_reference);
-        Json quality;
-        quality["reference_spp"] = options.reference_spp;
-        quality["time_model"] = {{"t0_seconds", time_model.t0}, {"k_seconds_per_spp", time_model.k}};
-        auto mean_of = [](const std::vector<double>& values, const std::vector<bool>& keep) {
-            double sum = 0;
-            int count = 0;
-            for (size_t t = 0; t < values.size(); ++t)
-                if (keep[t]) {
-                    sum += values[t];
-                    ++count;
-                }
-            return count ? sum / count : 0.0;
-        };
-        std::vector<bool> all(frames.size(), true), crossing(frames.size(), false);
-        bool has_crossing = false;
-        for (size_t t = 0; t < frames.size(); ++t)
-            if (options.scene == "switch" && frames[t] >= scene::kSwitchCrossingFirstFrame &&
-                frames[t] <= scene::kSwitchCrossingLastFrame)
-                crossing[t] = has_crossing = true;
-        const char* kLayers[] = {"DiffInd", "beauty"};
-        for (int layer = 0; layer < 2; ++layer) {
-            Json entry;
-            double noisy_error = mean_of(errors[layer][0], all);
-            double c = refine::noise_constant(noisy_error, options.spp, options.reference_spp);
-            entry["c"] = c;
-            for (int v = 0; v < 3; ++v) {
-                double error = mean_of(errors[layer][v], all);
-                entry["relmse"][kVersions[v]] = error;
-                if (has_crossing)
-                    entry["relmse_crossing_frames"][kVersions[v]] = mean_of(errors[layer][v], crossing);
-                double equivalent = refine::equivalent_spp(error, c, options.reference_spp);
-                bool finite = std::isfinite(equivalent);
-                entry["equivalent_spp"][kVersions[v]] = finite ? Json(equivalent) : Json();
-                entry["beyond_reference"][kVersions[v]] = !finite || equivalent > options.reference_spp;
-                double brute_force = frame_count * time_model.seconds(equivalent);
-                double our_time = v == 0 ? seconds["render"].get<double>()
-                                  : v == 1
-                                      ? seconds["render"].get<double>() + seconds["denoise"].get<double>()
-                                      : our_seconds;
-                entry["speedup"][kVersions[v]] = finite ? Json(brute_force / our_time) : Json();
-            }
-            entry["note"] = "beyond_reference: the error is within a few times the reference's own, so the "
-                            "equivalent spp (null: not measurable at all) and speed-up are extrapolated; "
-                            "render a reference with more spp";
-            quality[kLayers[layer]] = entry;
-        }
-        quality["per_frame"] = Json::array();
-        for (size_t t = 0; t < frames.size(); ++t)
-            quality["per_frame"].push_back({{"frame", frames[t]},
-                                            {"DiffInd", {errors[0][0][t], errors[0][1][t], errors[0][2][t]}},
-                                            {"beauty", {errors[1][0][t], errors[1][1][t], errors[1][2][t]}}});
-        summary["quality"] = quality;
+        summary["quality"] = quality_summary(options.scene, frames, errors, seconds,
+                                             {options.spp, render_json["render_seconds"].get<double>()},
+                                             {options.reference_spp, reference_json["render_seconds"].get<double>()});
     }
     if (report_data) {
-        complete_report(*report_data, options, final_indirect, io::find_input_sequence(masks, frame_range), errors,
+        complete_report(*report_data, options.scene, final_indirect, io::find_input_sequence(masks, frame_range), errors,
                         seconds);
         app::report::write_report(report_path, *report_data);
     }

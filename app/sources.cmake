@@ -7,6 +7,9 @@ target_sources(modestack PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/cmd_render.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_refine.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_run.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/run_composite.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/run_quality.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/run_report.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_compare.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sequence_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/color_adapters.cpp
