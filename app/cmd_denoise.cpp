@@ -19,6 +19,7 @@
 #include "io/sequence_reader.h"
 #include "io/text_output.h"
 
+#include <algorithm>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
@@ -49,12 +50,40 @@ struct DenoiseOptions {
     bool no_mode_filter = false;
     int mode_filter_modes = 16;
     std::vector<double> mode_filter_widths{0.75, 1.0, 1.5, 2.0, 3.0};
+    std::vector<std::string> mode_filter_guides{"auto"};
     bool skip_existing = false;
     std::string colorspace;
     std::string ocio_config;
     MethodOptions method_options;
     CommonOptions common;
 };
+
+// --mode-filter-guides: auto (every feature the input has), none, or a list.
+std::vector<denoise::Auxiliary> parse_feature_guides(const std::vector<std::string>& names)
+{
+    using denoise::Auxiliary;
+    if (names.size() == 1 && names[0] == "auto")
+        return {Auxiliary::Albedo, Auxiliary::Normal, Auxiliary::Depth};
+    if (names.size() == 1 && names[0] == "none")
+        return {};
+    std::vector<Auxiliary> kinds;
+    for (const std::string& name : names) {
+        Auxiliary kind;
+        if (name == "albedo")
+            kind = Auxiliary::Albedo;
+        else if (name == "normal")
+            kind = Auxiliary::Normal;
+        else if (name == "depth")
+            kind = Auxiliary::Depth;
+        else
+            throw usage_error(fmt::format("--mode-filter-guides '{}' is not one of auto, none, albedo, normal, depth",
+                                          name));
+        if (std::find(kinds.begin(), kinds.end(), kind) != kinds.end())
+            throw usage_error(fmt::format("--mode-filter-guides names '{}' twice", name));
+        kinds.push_back(kind);
+    }
+    return kinds;
+}
 
 denoise::Settings make_settings(const DenoiseOptions& options)
 {
@@ -88,6 +117,7 @@ denoise::Settings make_settings(const DenoiseOptions& options)
                                       options.rank_rule));
     settings.mode_filter.max_modes = options.mode_filter_modes;
     settings.mode_filter.widths = options.mode_filter_widths;
+    settings.feature_guide.kinds = parse_feature_guides(options.mode_filter_guides);
     settings.max_memory_bytes = parse_memory_budget(options.max_memory, "--max-memory");
     return settings;
 }
@@ -113,6 +143,7 @@ nlohmann::ordered_json mode_filter_json(const denoise::Report& report)
                          {"width", choice.width},
                          {"guided", choice.range > 0},
                          {"range", choice.range},
+                         {"feature_range", choice.feature_range},
                          {"sure", choice.sure},
                          {"sure_unfiltered", choice.unfiltered_sure},
                          {"signal", choice.signal},
@@ -122,6 +153,9 @@ nlohmann::ordered_json mode_filter_json(const denoise::Report& report)
     return {{"enabled", true},
             {"rank", plan.rank},
             {"guide", "first spatial mode"},
+            {"feature_guides", report.feature_guide.features},
+            {"feature_scales", report.feature_guide.scales},
+            {"feature_frames", report.feature_guide.frames},
             {"guide_smoothing", plan.guide_smoothing},
             {"survey_stride", plan.survey_stride},
             {"reasoning", plan.reasoning},
@@ -372,6 +406,11 @@ Subcommand add_denoise_command(CLI::App& parent)
                         "Gaussian widths (pixels) the mode filter tries, comma-separated; no filter is always tried")
         ->delimiter(',')
         ->check(CLI::Range(0.1, 16.0));
+    command->add_option("--mode-filter-guides", options->mode_filter_guides,
+                        "Features that may guide the mode filter's edges: auto (default: those the input has: "
+                        "DiffCol/Denoising Albedo, Normal, Depth next to the layer), none, or a list of albedo, "
+                        "normal, depth; SURE decides per mode whether they help")
+        ->delimiter(',');
     command->add_flag("--skip-existing", options->skip_existing,
                       "Do not rewrite output frames that exist already (farm re-runs)");
     command->add_option("--colorspace", options->colorspace,

@@ -44,8 +44,8 @@ void add_method_options(CLI::App& command, MethodOptions& options)
     command.add_option(
         "--whiten", options.whiten,
         "Weight every pixel by 1/sqrt(its mean noise variance) before the SVD and back after, so that "
-        "bright noisy regions do not take the modes: auto (when the input has a variance layer <layer>Var, "
-        "e.g. DiffIndVar), on, off (default)");
+        "bright noisy regions do not take the modes: auto (the default: when the input has a variance layer "
+        "<layer>Var, e.g. DiffIndVar), on, off");
 }
 
 void apply_training_frames(const MethodOptions& options, const std::vector<int>& frame_numbers,

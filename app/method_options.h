@@ -29,7 +29,7 @@ struct MethodOptions {
     std::string train_frames; ///< "" = all frames, else a frame range
     bool weight_smoothing = false;    ///< --weight-smoothing (the default anyway)
     bool no_weight_smoothing = false; ///< --no-weight-smoothing
-    std::string whiten = "off"; ///< auto, on or off
+    std::string whiten = "auto"; ///< auto, on or off
 };
 
 /// Adds the options to `command`.

@@ -50,11 +50,18 @@ public:
         // Sigma's window reads radius + 1 rows around a pixel (see confidence.h); the
         // mode filter reads its kernel and guide around a pixel.
         int halo_rows = m_settings.sigma_radius + 1, plan_modes = largest_rank;
+        m_filter_options = m_settings.mode_filter;
         if (m_settings.mode_filter.enabled) {
-            halo_rows = std::max(halo_rows, mode_filter_halo(m_settings.mode_filter));
-            // Surveyed and filtered coefficients, the per-sample kept noise (F) and
-            // the guide with its noise (a few images).
-            plan_modes += std::max(m_settings.mode_filter.max_modes, largest_rank) + m_shape.frames + 6;
+            if (!m_settings.feature_guide.kinds.empty()) {
+                m_features.emplace(m_source, m_settings.feature_guide, m_progress);
+                m_filter_options.feature_channels = m_features->channels();
+                m_report.feature_guide = m_features->summary();
+            }
+            halo_rows = std::max(halo_rows, mode_filter_halo(m_filter_options));
+            // Surveyed and filtered coefficients, the per-sample kept noise (F),
+            // the guide with its noise (a few images) and the feature rows.
+            plan_modes += std::max(m_settings.mode_filter.max_modes, largest_rank) + m_shape.frames + 6 +
+                          (m_filter_options.feature_channels + m_shape.channels - 1) / m_shape.channels;
         }
         m_report.plan =
             plan_bands(m_shape, m_settings.max_memory_bytes, halo_rows, plan_modes, m_source.band_bytes_per_row());
@@ -298,11 +305,20 @@ private:
         return band;
     }
 
+    // The feature guide's rows for a band (with its halo), or null without features.
+    const float* band_features(const Band& data, std::vector<float>& features) const
+    {
+        if (m_filter_options.feature_channels == 0)
+            return nullptr;
+        m_features->read_rows(data.row_begin, data.row_end, features);
+        return features.data();
+    }
+
     // Modes the mode filter surveys (and the K of its noise estimate): at most F − 2
     // so that the noise estimate has two degrees of freedom, at least a fixed N.
     int filter_survey_modes(const lowrank::Basis& basis) const
     {
-        int modes = std::min({m_settings.mode_filter.max_modes, m_shape.frames - 2, basis.modes()});
+        int modes = std::min({m_filter_options.max_modes, m_shape.frames - 2, basis.modes()});
         if (m_settings.rank.rule == lowrank::RankRule::Fixed)
             modes = std::max(modes, m_settings.rank.fixed_rank);
         return std::max(1, modes);
@@ -314,12 +330,12 @@ private:
         const BandPlan& plan = m_report.plan;
         m_filter_modes = filter_survey_modes(basis);
         Eigen::MatrixXd temporal = basis.temporal.leftCols(m_filter_modes);
-        SureSurvey survey(m_settings.mode_filter, m_shape.width, m_shape.height, m_shape.channels, m_filter_modes);
+        SureSurvey survey(m_filter_options, m_shape.width, m_shape.height, m_shape.channels, m_filter_modes);
         if (!plan.in_memory)
             ++m_report.passes;
         m_progress.begin("mode filter: choosing widths", m_shape.height);
         Band band;
-        std::vector<float> coefficients, noise_variance;
+        std::vector<float> coefficients, noise_variance, features;
         for (int row = 0; row < m_shape.height; row += plan.band_rows) {
             int end = std::min(m_shape.height, row + plan.band_rows);
             Band& data = band_with_halo(band, row, end);
@@ -331,7 +347,7 @@ private:
             coefficient_noise_variance(noisy, coefficient_view.view(), shape, m_settings.mode_filter.noise_radius,
                                        noise_variance);
             survey.add_band(coefficient_view.view(), noise_variance, shape, data.row_begin, row - data.row_begin,
-                            end - data.row_begin);
+                            end - data.row_begin, band_features(data, features));
             m_progress.advance(end - row);
         }
         m_progress.end();
@@ -356,10 +372,11 @@ private:
         lowrank::BandView noisy = data.view(frames).view();
         lowrank::BandView surveyed{coefficients.data(), data.rows, m_filter_modes, data.rows};
         lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
-        std::vector<float> noise_variance, filtered(static_cast<size_t>(valid) * rank), gains;
+        std::vector<float> noise_variance, filtered(static_cast<size_t>(valid) * rank), gains, features;
         coefficient_noise_variance(noisy, surveyed, shape, m_settings.mode_filter.noise_radius, noise_variance);
         filter_coefficients(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin,
-                            m_report.mode_filter, rank, {filtered.data(), valid, rank, valid}, gains);
+                            m_report.mode_filter, rank, {filtered.data(), valid, rank, valid}, gains,
+                            band_features(data, features));
         for (int j = 0; j < rank; ++j)
             std::copy(filtered.begin() + j * valid, filtered.begin() + (j + 1) * valid,
                       coefficients.begin() + j * data.rows + offset);
@@ -481,6 +498,8 @@ private:
     std::vector<std::uint8_t> m_cleaned_samples;
     double m_solve_seconds = 0;
     int m_filter_modes = 0;  // modes the mode filter surveyed
+    ModeFilterOptions m_filter_options;       // the settings' with the feature channels found
+    std::optional<FeatureGuide> m_features;  // the mode filter's feature guide
     std::optional<TrainingGram> m_training;  // --train-frames
 };
 

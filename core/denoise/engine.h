@@ -13,6 +13,7 @@
 
 #include "core/common/progress.h"
 #include "core/denoise/band_plan.h"
+#include "core/denoise/feature_guide.h"
 #include "core/denoise/frame_stream.h"
 #include "core/denoise/mode_filter.h"
 #include "core/denoise/non_negative.h"
@@ -52,6 +53,9 @@ struct Settings {
     /// Spatial filtering of the modes; when enabled, `auto` rank is chosen by its SURE
     /// survey instead of rank.rule (see mode_filter.h).
     ModeFilterOptions mode_filter;
+    /// Features that guide the mode filter when the input has them (feature_guide.h);
+    /// no kinds: none.
+    FeatureGuideOptions feature_guide;
     /// --non-negative: correction of rebuilt values below non_negative_floor
     /// (non_negative.h); the floor is f(0) under a --transform.
     NonNegativeMode non_negative = NonNegativeMode::Off;
@@ -87,6 +91,7 @@ struct Report {
     std::vector<std::vector<double>> preview_temporal_modes;
     lowrank::OutlierCounts outliers;
     ModeFilterPlan mode_filter;     ///< per-mode filters and SURE (empty when off)
+    FeatureGuideSummary feature_guide;  ///< the features that guided it (empty: none)
     NonNegativeCounts non_negative;      ///< what --non-negative changed
     std::vector<double> shrinkage;       ///< per kept mode η(σ_j)/σ_j (empty: hard truncation)
     WeightSmoothingPlan weight_smoothing;  ///< what --weight-smoothing did per kept mode

@@ -42,6 +42,8 @@ std::vector<double> gaussian_1d(double width)
 struct Guide {
     std::vector<double> value;
     std::vector<double> noise;
+    const float* features = nullptr;  // normalised features [y][x][k] (feature_guide.h), or none
+    int feature_channels = 0;
 };
 
 Guide build_guide(const BandView& coefficients, const std::vector<float>& noise_variance, const ImageBandShape& shape,
@@ -103,6 +105,14 @@ public:
         const double spatial_scale = -0.5 / (candidate.width * candidate.width);
         const double range_scale =
             candidate.range > 0 ? -0.5 / (candidate.range * candidate.range * m_shape.channels) : 0.0;
+        const int feature_channels = m_guide.feature_channels;
+        const double feature_scale =
+            candidate.feature_range > 0 && m_guide.features
+                ? -0.5 / (candidate.feature_range * candidate.feature_range * feature_channels)
+                : 0.0;
+        const float* centre_features =
+            feature_scale != 0 ? m_guide.features + (static_cast<std::int64_t>(y) * m_shape.width + x) * feature_channels
+                               : nullptr;
         const std::int64_t row_length = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
         const std::int64_t centre = y * row_length + static_cast<std::int64_t>(x) * m_shape.channels;
         double sum = 0;
@@ -119,6 +129,16 @@ public:
                                     (m_guide.noise[centre + c] + m_guide.noise[other + c] + 1e-30);
                     }
                     exponent += range_scale * distance;
+                }
+                if (feature_scale != 0) {
+                    const float* other =
+                        m_guide.features + (static_cast<std::int64_t>(qy) * m_shape.width + qx) * feature_channels;
+                    double distance = 0;
+                    for (int k = 0; k < feature_channels; ++k) {
+                        const double difference = static_cast<double>(centre_features[k]) - other[k];
+                        distance += difference * difference;
+                    }
+                    exponent += feature_scale * distance;
                 }
                 sum += weights[index] = std::exp(exponent);
             }
@@ -170,6 +190,18 @@ std::vector<FilterCandidate> filter_candidates(const ModeFilterOptions& options)
         for (double width : options.widths)
             if (width > 0 && range > 0)
                 candidates.push_back({width, range});
+    if (options.feature_channels > 0)
+        for (double feature_range : options.feature_ranges) {
+            if (feature_range <= 0)
+                continue;
+            for (double width : options.widths)
+                if (width > 0)
+                    candidates.push_back({width, 0.0, feature_range});
+            for (double range : options.range_scales)
+                for (double width : options.widths)
+                    if (width > 0 && range > 0)
+                        candidates.push_back({width, range, feature_range});
+        }
     return candidates;
 }
 
@@ -238,12 +270,17 @@ SureSurvey::SureSurvey(const ModeFilterOptions& options, int width, int height, 
 }
 
 void SureSurvey::add_band(const BandView& coefficients, const std::vector<float>& noise_variance,
-                          const ImageBandShape& shape, int band_y0, int valid_y0, int valid_y1)
+                          const ImageBandShape& shape, int band_y0, int valid_y0, int valid_y1, const float* features)
 {
     check_band(coefficients, noise_variance, shape, valid_y0, valid_y1, "SureSurvey::add_band");
     if (coefficients.frames != m_modes || shape.width != m_width || shape.channels != m_channels)
         throw internal_error("SureSurvey::add_band: band does not match the survey");
-    const Guide guide = build_guide(coefficients, noise_variance, shape, m_options.guide_smoothing);
+    Guide guide = build_guide(coefficients, noise_variance, shape, m_options.guide_smoothing);
+    if (m_options.feature_channels > 0) {
+        if (!features)
+            throw internal_error("SureSurvey::add_band: the survey expects feature rows");
+        guide.features = features, guide.feature_channels = m_options.feature_channels;
+    }
     const int candidates = static_cast<int>(m_candidates.size());
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
     throw_if_cancelled();
@@ -316,6 +353,7 @@ ModeFilterPlan SureSurvey::finish(int fixed_rank) const
     plan.candidates = m_candidates;
     plan.survey_stride = m_stride;
     plan.guide_smoothing = m_options.guide_smoothing;
+    plan.feature_channels = m_options.feature_channels;
     std::vector<double> cumulative_gain;
     double gain = 0;
     for (int j = 0; j < m_modes; ++j) {
@@ -336,6 +374,7 @@ ModeFilterPlan SureSurvey::finish(int fixed_rank) const
         }
         choice.width = m_candidates[choice.candidate].width;
         choice.range = m_candidates[choice.candidate].range;
+        choice.feature_range = m_candidates[choice.candidate].feature_range;
         choice.signal = energy[j] - mode_noise;
         gain += choice.signal - choice.sure;
         cumulative_gain.push_back(gain);
@@ -364,7 +403,7 @@ ModeFilterPlan SureSurvey::finish(int fixed_rank) const
 
 void filter_coefficients(const BandView& coefficients, const std::vector<float>& noise_variance,
                          const ImageBandShape& shape, int valid_y0, int valid_y1, const ModeFilterPlan& plan,
-                         int rank, MutableBandView filtered, std::vector<float>& gains)
+                         int rank, MutableBandView filtered, std::vector<float>& gains, const float* features)
 {
     check_band(coefficients, noise_variance, shape, valid_y0, valid_y1, "filter_coefficients");
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
@@ -373,7 +412,12 @@ void filter_coefficients(const BandView& coefficients, const std::vector<float>&
         throw internal_error("filter_coefficients: output does not match the plan");
     const std::int64_t valid_pixels = static_cast<std::int64_t>(shape.width) * (valid_y1 - valid_y0);
     gains.assign(static_cast<std::size_t>(valid_pixels) * rank, 1.0f);
-    const Guide guide = build_guide(coefficients, noise_variance, shape, plan.guide_smoothing);
+    Guide guide = build_guide(coefficients, noise_variance, shape, plan.guide_smoothing);
+    if (plan.feature_channels > 0) {
+        if (!features)
+            throw internal_error("filter_coefficients: the plan expects feature rows");
+        guide.features = features, guide.feature_channels = plan.feature_channels;
+    }
     throw_if_cancelled();
     tbb::parallel_for(valid_y0, valid_y1, [&](int y) {
         WeightWindow window(guide, shape);

@@ -54,6 +54,13 @@ struct ModeFilterOptions {
     /// of ρ·√channels noise deviations (of the difference) scales a weight by e^(-1/2).
     /// Plain Gaussians (no range kernel) are always tried as well.
     std::vector<double> range_scales{2.0};
+    /// Feature channels per pixel (albedo, normal, depth: feature_guide.h) passed with
+    /// every band; 0: no feature guide. With features, each width is also tried with a
+    /// feature range kernel of each width below, alone and with the c_1 kernel.
+    int feature_channels = 0;
+    /// Feature range widths ρ_f tried: a normalised feature difference of ρ_f (RMS
+    /// over the feature channels) scales a weight by e^(-1/2).
+    std::vector<double> feature_ranges{0.25, 1.0};
     /// Modes surveyed (and the K of the noise estimate): min(this, F − 2, modes found).
     int max_modes = 16;
     /// Pre-smoothing of the guide (c_1), Gaussian σ in pixels.
@@ -65,10 +72,11 @@ struct ModeFilterOptions {
     std::int64_t survey_pixels = std::int64_t(1) << 16;
 };
 
-/// One filter: width 0 is the identity; range 0 a plain Gaussian.
+/// One filter: width 0 is the identity; range and feature_range 0 a plain Gaussian.
 struct FilterCandidate {
-    double width = 0;  ///< spatial σ, pixels
-    double range = 0;  ///< range-kernel width in guide-noise units; 0 = none
+    double width = 0;          ///< spatial σ, pixels
+    double range = 0;          ///< c_1 range-kernel width in guide-noise units; 0 = none
+    double feature_range = 0;  ///< feature range-kernel width (normalised units); 0 = none
 };
 
 /// What the survey found for one mode.
@@ -76,6 +84,7 @@ struct ModeFilterChoice {
     int candidate = 0;   ///< index into ModeFilterPlan::candidates
     double width = 0;    ///< chosen spatial σ (0 = not filtered)
     double range = 0;    ///< chosen range width (0 = plain Gaussian)
+    double feature_range = 0;  ///< chosen feature range width (0 = not feature-guided)
     double sure = 0;     ///< SURE of the chosen filter: estimated ‖A c − s‖²
     double unfiltered_sure = 0;  ///< SURE without filtering (= Σ v_p)
     double signal = 0;   ///< estimated signal energy ‖s‖² = ‖c‖² − Σ v_p
@@ -90,10 +99,12 @@ struct ModeFilterPlan {
     int rank = 0;                         ///< modes kept
     int survey_stride = 1;                ///< pixel grid step of the survey
     double guide_smoothing = 1.0;         ///< pre-smoothing of the guide, as surveyed
+    int feature_channels = 0;             ///< feature channels the filter expects with each band
     std::string reasoning;                ///< one sentence for the report
 };
 
-/// The candidates tried: identity, then each width plain, then each width × range.
+/// The candidates tried: identity, then each width plain, then each width × range,
+/// then (with features) each width × feature range, alone and with each range.
 std::vector<FilterCandidate> filter_candidates(const ModeFilterOptions& options);
 /// Rows the filter reads around an output row (largest kernel + guide smoothing).
 int mode_filter_halo(const ModeFilterOptions& options);
@@ -112,9 +123,12 @@ public:
     SureSurvey(const ModeFilterOptions& options, int width, int height, int channels, int modes);
     /// Adds rows [valid_y0, valid_y1) of a band whose first row is image row `band_y0`:
     /// `coefficients` holds the band's `modes` coefficient images, `noise_variance` the
-    /// output of coefficient_noise_variance. Each image row may be added once.
+    /// output of coefficient_noise_variance, `features` the band's normalised feature
+    /// rows ([row][x][options.feature_channels]; null without features). Each image
+    /// row may be added once.
     void add_band(const lowrank::BandView& coefficients, const std::vector<float>& noise_variance,
-                  const lowrank::ImageBandShape& shape, int band_y0, int valid_y0, int valid_y1);
+                  const lowrank::ImageBandShape& shape, int band_y0, int valid_y0, int valid_y1,
+                  const float* features = nullptr);
     /// Chooses a filter per mode and N: `fixed_rank` > 0 keeps that many modes,
     /// 0 keeps the prefix that maximises Σ (signal − SURE) (at least 1).
     ModeFilterPlan finish(int fixed_rank) const;
@@ -131,10 +145,11 @@ private:
 /// Filters rows [valid_y0, valid_y1) of the first `rank` coefficient images with the
 /// plan's choices into `filtered` (valid rows × rank modes) and writes each pixel's
 /// noise gain Σ_q a_pq² per mode into `gains` ([mode][valid pixel]; 1 = unfiltered):
-/// the filtered mode keeps v_p·gain of the noise.
+/// the filtered mode keeps v_p·gain of the noise. `features` as for SureSurvey::add_band
+/// (plan.feature_channels per pixel).
 void filter_coefficients(const lowrank::BandView& coefficients, const std::vector<float>& noise_variance,
                          const lowrank::ImageBandShape& shape, int valid_y0, int valid_y1,
                          const ModeFilterPlan& plan, int rank, lowrank::MutableBandView filtered,
-                         std::vector<float>& gains);
+                         std::vector<float>& gains, const float* features = nullptr);
 
 }  // namespace modestack::denoise

@@ -1,6 +1,7 @@
 target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/band_plan.cpp
   ${CMAKE_CURRENT_LIST_DIR}/engine.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/feature_guide.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mode_filter.cpp)
 target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/non_negative.cpp

@@ -16,23 +16,41 @@ namespace modestack::denoise::testing {
 struct MemoryShot : FrameSource {
     ShotShape size;
     std::vector<std::vector<float>> frames;
-    /// Optional auxiliary layer: the variance of each sample, frames like `frames`.
+    /// Optional auxiliary layers, frames like `frames`: the variance of each sample
+    /// (channels as the shot), and features with their own channel counts.
     std::vector<std::vector<float>> variance;
+    struct Feature {
+        int channels = 0;
+        std::vector<std::vector<float>> frames;
+    };
+    Feature albedo, normal, depth;
     ShotShape shape() const override { return size; }
     void read_rows(int frame, int row_begin, int row_end, float* destination) override
     {
         std::size_t row = static_cast<std::size_t>(size.width) * size.channels;
         std::copy(frames[frame].begin() + row_begin * row, frames[frame].begin() + row_end * row, destination);
     }
+    const Feature* feature(Auxiliary kind) const
+    {
+        switch (kind) {
+        case Auxiliary::Albedo: return &albedo;
+        case Auxiliary::Normal: return &normal;
+        case Auxiliary::Depth: return &depth;
+        default: return nullptr;
+        }
+    }
     int auxiliary_channels(Auxiliary kind) const override
     {
-        return kind == Auxiliary::Variance && !variance.empty() ? size.channels : 0;
+        if (kind == Auxiliary::Variance)
+            return variance.empty() ? 0 : size.channels;
+        return feature(kind)->channels;
     }
     void read_auxiliary_rows(Auxiliary kind, int frame, int row_begin, int row_end, float* destination) override
     {
         REQUIRE(auxiliary_channels(kind) > 0);
-        std::size_t row = static_cast<std::size_t>(size.width) * size.channels;
-        std::copy(variance[frame].begin() + row_begin * row, variance[frame].begin() + row_end * row, destination);
+        const std::vector<float>& source = kind == Auxiliary::Variance ? variance[frame] : feature(kind)->frames[frame];
+        std::size_t row = static_cast<std::size_t>(size.width) * auxiliary_channels(kind);
+        std::copy(source.begin() + row_begin * row, source.begin() + row_end * row, destination);
     }
 };
 

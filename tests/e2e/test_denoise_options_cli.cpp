@@ -4,6 +4,7 @@
 // --shrink optimal reports its factors, --segments splits by a list and finds a
 // planted cut, --weight-smoothing lowers flicker and keeps a lighting step,
 // --whiten finds a Cycles-style variance layer and keeps a quiet region's mode;
+// --mode-filter-guides finds Cycles-style features and keeps an albedo edge;
 // bad values and combinations exit 2 with one line naming the
 // option and write nothing.
 #include "tests/tools/testkit.h"
@@ -289,7 +290,7 @@ TEST_CASE("denoise --whiten: found by name in Cycles-style layers, keeps the qui
         return truth(frame, x, y, 2 - c) + deviation(x) / 0.1f * noise(frame, x, y, c);
     });
     std::string input = "denoise " + dir.file("v.####.exr") + " -q --layer DiffInd --no-mode-filter --rank 3 ";
-    auto off = run_modestack(input + "--json " + dir.file("off.json") + " -o " + dir.file("off/d.####.exr"));
+    auto off = run_modestack(input + "--whiten off --json " + dir.file("off.json") + " -o " + dir.file("off/d.####.exr"));
     REQUIRE_MESSAGE(off.exit_code == 0, off.err);
     auto on = run_modestack(input + "--whiten auto --json " + dir.file("on.json") + " -o " + dir.file("on/d.####.exr"));
     REQUIRE_MESSAGE(on.exit_code == 0, on.err);
@@ -334,6 +335,58 @@ TEST_CASE("denoise --whiten: found by name in Cycles-style layers, keeps the qui
     CHECK_FALSE(std::ifstream(dir.file("r/d.0001.exr")).good());
 }
 
+TEST_CASE("denoise --mode-filter-guides: Cycles-style albedo and normal found by name, an albedo edge kept sharper")
+{
+    // A reflectance step at x = kWidth / 2 in the light, with the same step in
+    // DiffCol; the normal is the same everywhere (no edge: dropped).
+    auto truth = [](int frame, int x, int y, int) {
+        const float time = static_cast<float>(frame) / kFrames;
+        return (x < kWidth / 2 ? 0.2f : 1.0f) * (1.0f + 0.4f * std::sin(0.3f * y) * std::cos(3.0f * time));
+    };
+    testkit::ExrLayout guides_layout = layout();
+    guides_layout.channel_names = {"ViewLayer.DiffCol.B", "ViewLayer.DiffCol.G", "ViewLayer.DiffCol.R",
+                                   "ViewLayer.DiffInd.B", "ViewLayer.DiffInd.G", "ViewLayer.DiffInd.R",
+                                   "ViewLayer.Normal.X",  "ViewLayer.Normal.Y",  "ViewLayer.Normal.Z"};
+    guides_layout.channel_types.assign(9, "float");
+    TempDir dir;
+    testkit::write_sequence(dir.file("g.%04d.exr"), all_frames(), guides_layout, [&](int frame, int x, int y, int c) {
+        if (c < 3)
+            return x < kWidth / 2 ? 0.2f : 1.0f;
+        if (c >= 6)
+            return c == 7 ? 1.0f : 0.0f;
+        return truth(frame, x, y, c) + 2.0f * noise(frame, x, y, c);
+    });
+    const std::string input = "denoise " + dir.file("g.####.exr") + " -q --layer DiffInd ";
+    auto guided = run_modestack(input + "--json " + dir.file("on.json") + " -o " + dir.file("on/d.####.exr"));
+    REQUIRE_MESSAGE(guided.exit_code == 0, guided.err);
+    auto plain = run_modestack(input + "--mode-filter-guides none --json " + dir.file("off.json") + " -o " +
+                               dir.file("off/d.####.exr"));
+    REQUIRE_MESSAGE(plain.exit_code == 0, plain.err);
+    auto on = load_json(dir.file("on.json"))["mode_filter"];
+    CHECK(on["feature_guides"] == nlohmann::json::array({"albedo"}));
+    CHECK(on["feature_frames"].size() == 4);
+    CHECK(load_json(dir.file("off.json"))["mode_filter"]["feature_guides"].empty());
+    auto edge_error = [&](const std::string& pattern) {
+        double sum = 0;
+        for (int frame = 1; frame <= kFrames; ++frame) {
+            char name[4096];
+            std::snprintf(name, sizeof name, pattern.c_str(), frame);
+            std::vector<float> values =
+                testkit::read_channels(name, {"ViewLayer.DiffInd.R", "ViewLayer.DiffInd.G", "ViewLayer.DiffInd.B"});
+            for (int y = 0; y < kHeight; ++y)
+                for (int x = kWidth / 2 - 2; x < kWidth / 2 + 2; ++x)
+                    for (int c = 0; c < 3; ++c) {
+                        const double error = values[(size_t(y) * kWidth + x) * 3 + c] - truth(frame, x, y, c);
+                        sum += error * error;
+                    }
+        }
+        return sum;
+    };
+    const double with_guides = edge_error(dir.file("on/d.%04d.exr")), without = edge_error(dir.file("off/d.%04d.exr"));
+    MESSAGE("squared error next to the edge: without guides " << without << ", with " << with_guides);
+    CHECK(with_guides < 0.7 * without);
+}
+
 TEST_CASE("denoise method options: bad values and combinations exit 2 with one line, nothing written")
 {
     TempDir dir;
@@ -365,6 +418,8 @@ TEST_CASE("denoise method options: bad values and combinations exit 2 with one l
         {"--whiten maybe", "--whiten 'maybe'"},
         {"--weight-smoothing --no-weight-smoothing", "--weight-smoothing and --no-weight-smoothing contradict"},
         {"--whiten on --transform log", "--whiten on cannot be combined with --transform log"},
+        {"--mode-filter-guides albedo,shadows", "--mode-filter-guides 'shadows'"},
+        {"--mode-filter-guides depth,depth", "--mode-filter-guides names 'depth' twice"},
     };
     for (const Case& c : cases) {
         CAPTURE(c.arguments);
