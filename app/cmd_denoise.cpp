@@ -19,10 +19,10 @@
 #include "io/sequence_reader.h"
 #include "io/text_output.h"
 
-#include <algorithm>
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <optional>
@@ -51,6 +51,7 @@ struct DenoiseOptions {
     int mode_filter_modes = 16;
     std::vector<double> mode_filter_widths{0.75, 1.0, 1.5, 2.0, 3.0};
     std::vector<std::string> mode_filter_guides{"auto"};
+    std::string rank_map;
     bool skip_existing = false;
     std::string colorspace;
     std::string ocio_config;
@@ -118,6 +119,11 @@ denoise::Settings make_settings(const DenoiseOptions& options)
     settings.mode_filter.max_modes = options.mode_filter_modes;
     settings.mode_filter.widths = options.mode_filter_widths;
     settings.feature_guide.kinds = parse_feature_guides(options.mode_filter_guides);
+    settings.rank_map.enabled = !options.rank_map.empty();
+    if (settings.rank_map.enabled && !settings.mode_filter.enabled)
+        throw usage_error("--rank-map needs the mode filter: the local estimates use its noise and filters");
+    if (settings.rank_map.enabled && !options.method_options.segments.empty())
+        throw usage_error("--rank-map cannot be combined with --segments: each part has a map of its own");
     settings.max_memory_bytes = parse_memory_budget(options.max_memory, "--max-memory");
     return settings;
 }
@@ -197,6 +203,13 @@ nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::Seq
     json["temporal_modes"] = report.temporal_modes;
     json["outliers"] = {{"non_finite", report.outliers.non_finite}, {"fireflies", report.outliers.fireflies}};
     json["mode_filter"] = mode_filter_json(report);
+    if (report.rank_map.largest_rank > 0)
+        json["rank_map"] = {{"file", options.rank_map},
+                            {"largest_rank", report.rank_map.largest_rank},
+                            {"mean", report.rank_map.mean},
+                            {"smallest", report.rank_map.smallest},
+                            {"largest", report.rank_map.largest},
+                            {"pixels_per_whole_rank", report.rank_map.histogram}};
     json["seconds"] = {{"statistics", report.seconds_statistics},
                        {"solve", report.seconds_solve},
                        {"rebuild", report.seconds_rebuild},
@@ -261,6 +274,8 @@ int run_denoise(const DenoiseOptions& options)
         report::check_report_path(options.report_path, input.files);
     if (!options.save_modes.empty())
         io::check_outputs({(std::filesystem::path(options.save_modes) / "mode.01.exr").string()}, input.files);
+    if (!options.rank_map.empty())
+        io::check_outputs({options.rank_map}, input.files);
     io::SequenceReader reader(input, options.layers);
     DenoiseColor color = choose_denoise_color(options.ocio_config, options.colorspace, reader);
 
@@ -285,6 +300,7 @@ int run_denoise(const DenoiseOptions& options)
     SequenceSource source(reader);
     SequenceSink sink(reader, paths, options.save_modes);
     sink.reuse_rows_of(source);
+    sink.write_rank_map_to(options.rank_map);
     std::vector<io::HeaderAttribute> attributes{
         io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
         io::HeaderAttribute::of_text("modestack:command", command_line()),
@@ -406,6 +422,10 @@ Subcommand add_denoise_command(CLI::App& parent)
                         "Gaussian widths (pixels) the mode filter tries, comma-separated; no filter is always tried")
         ->delimiter(',')
         ->check(CLI::Range(0.1, 16.0));
+    command->add_option("--rank-map", options->rank_map,
+                        "Let the number of modes vary per pixel (fractional: blends N and N + 1) by the local "
+                        "signal of each filtered mode against its noise, and write the map to this EXR "
+                        "(channel 'rank'); needs the mode filter");
     command->add_option("--mode-filter-guides", options->mode_filter_guides,
                         "Features that may guide the mode filter's edges: auto (default: those the input has: "
                         "DiffCol/Denoising Albedo, Normal, Depth next to the layer), none, or a list of albedo, "

@@ -1,5 +1,6 @@
 #include "app/sequence_adapters.h"
 
+#include "app/command.h"
 #include "core/common/error.h"
 
 #include <fmt/format.h>
@@ -157,6 +158,8 @@ void SequenceSink::commit()
             output->commit();
     for (auto& output : m_mode_outputs)
         output->commit();
+    if (m_rank_map)
+        m_rank_map->commit();
 }
 
 void SequenceSink::write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma)
@@ -174,6 +177,26 @@ void SequenceSink::write_rows(int frame_index, int row_begin, int row_end, const
         }
     }
     output->write_replaced_rows(row_begin, row_end, native, rebuilt, sigma);
+}
+
+void SequenceSink::write_rank_rows(int row_begin, int row_end, const float* ranks)
+{
+    if (m_rank_map_path.empty())
+        return;
+    if (!m_rank_map) {
+        io::NewImageDescription image;
+        image.width = m_reader.width();
+        image.height = m_reader.height();
+        image.channel_names = {"rank"};
+        image.channel_types = {"float"};
+        m_rank_map = std::make_unique<io::FrameOutput>(
+            m_rank_map_path, image,
+            std::vector<io::HeaderAttribute>{
+                io::HeaderAttribute::of_text("modestack:command", command_line()),
+                io::HeaderAttribute::of_text("modestack:rank_map",
+                                             "modes used per pixel; a fraction blends the next mode in")});
+    }
+    m_rank_map->write_float_rows(row_begin, row_end, ranks);
 }
 
 void SequenceSink::write_mode_rows(int row_begin, int row_end, int modes, const float* spatial_modes)

@@ -81,6 +81,8 @@ public:
     void reuse_rows_of(SequenceSource& source) { m_source = &source; }
     /// Attributes every output header gets (provenance), besides rank, rule and solver.
     void set_attributes(std::vector<io::HeaderAttribute> attributes) { m_attributes = std::move(attributes); }
+    /// --rank-map: also writes the per-pixel rank to `path` (one channel "rank").
+    void write_rank_map_to(std::string path) { m_rank_map_path = std::move(path); }
     /// Opens every output under its temporary name.
     void begin(const denoise::RebuildStart& start) override;
     /// Renames every finished output into place.
@@ -89,6 +91,7 @@ public:
     void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma) override;
     void write_mode_rows(int row_begin, int row_end, int modes, const float* spatial_modes) override;
     bool wants_modes() const override { return !m_modes_directory.empty(); }
+    void write_rank_rows(int row_begin, int row_end, const float* ranks) override;
 
 private:
     const io::SequenceReader& m_reader;
@@ -99,6 +102,8 @@ private:
     std::vector<io::HeaderAttribute> m_attributes;
     std::vector<std::unique_ptr<io::FrameOutput>> m_outputs;
     std::vector<std::unique_ptr<io::FrameOutput>> m_mode_outputs;
+    std::string m_rank_map_path;
+    std::unique_ptr<io::FrameOutput> m_rank_map;
 };
 
 }  // namespace modestack::app

@@ -109,6 +109,8 @@ private:
                                           m_settings.rank.fixed_rank, m_shape.frames - 1, m_shape.frames));
         if (m_settings.sigma_radius < 0)
             throw usage_error("--sigma-radius must be 0 or more");
+        if (m_settings.rank_map.enabled && !m_settings.mode_filter.enabled)
+            throw usage_error("--rank-map needs the mode filter: the local estimates use its noise and filters");
         if (m_settings.optimal_shrinkage && m_settings.mode_filter.enabled)
             throw usage_error("--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
         if (!m_settings.training_frames.empty())
@@ -363,8 +365,10 @@ private:
     // The mode filter's part of pass 2 for rows [row, end) of `data`: filters the
     // first `rank` coefficient images in place (valid rows only) and writes the noise
     // each rebuilt sample keeps, h_t(p) = Σ_j V_tj² · gain_j(p), for sigma.
+    // With --rank-map, `ranks` receives each valid pixel's rank and every filtered
+    // mode is scaled by its blend weight at the pixel (rank_map.h).
     void filter_band(std::vector<float>& coefficients, const Band& data, const Eigen::MatrixXd& temporal, int rank,
-                     int row, int end, std::vector<float>& kept_noise)
+                     int row, int end, std::vector<float>& kept_noise, std::vector<float>* ranks)
     {
         const int frames = m_shape.frames;
         const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
@@ -377,11 +381,24 @@ private:
         filter_coefficients(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin,
                             m_report.mode_filter, rank, {filtered.data(), valid, rank, valid}, gains,
                             band_features(data, features));
+        const std::int64_t valid_pixels = valid / m_shape.channels;
+        if (ranks) {
+            std::vector<float> weights;
+            local_rank(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin,
+                       m_report.mode_filter, m_report.rank.rank, rank, gains, m_settings.rank_map.radius, weights,
+                       *ranks);
+            for (int j = 0; j < rank; ++j)
+                for (std::int64_t i = 0; i < valid; ++i) {
+                    const float weight = weights[static_cast<size_t>(j * valid_pixels + i / m_shape.channels)];
+                    filtered[static_cast<size_t>(j * valid + i)] *= weight;
+                    if (i % m_shape.channels == 0)  // the kept noise of a scaled mode: w² · gain
+                        gains[static_cast<size_t>(j * valid_pixels + i / m_shape.channels)] *= weight * weight;
+                }
+        }
         for (int j = 0; j < rank; ++j)
             std::copy(filtered.begin() + j * valid, filtered.begin() + (j + 1) * valid,
                       coefficients.begin() + j * data.rows + offset);
         kept_noise.resize(static_cast<size_t>(valid) * frames);
-        const std::int64_t valid_pixels = valid / m_shape.channels;
         tbb::parallel_for(0, frames, [&](int t) {
             for (std::int64_t i = 0; i < valid; ++i) {
                 const std::int64_t pixel = i / m_shape.channels;
@@ -396,15 +413,21 @@ private:
     void rebuild(const lowrank::Basis& basis, int rank)
     {
         const BandPlan& plan = m_report.plan;
+        // --rank-map: pixels may use modes beyond N, up to those the filter surveyed.
+        const bool rank_map = m_settings.rank_map.enabled;
+        const int rebuild_modes =
+            rank_map ? std::max(rank, std::min(rank + m_settings.rank_map.extra_modes, m_filter_modes)) : rank;
         // With training frames the projection (A) and the rebuild (B) differ: training.h.
-        Eigen::MatrixXd temporal = m_training ? m_training->weights(basis, rank) : basis.temporal.leftCols(rank);
+        Eigen::MatrixXd temporal =
+            m_training ? m_training->weights(basis, rank) : basis.temporal.leftCols(rebuild_modes);
         const bool smooth = m_settings.weight_smoothing.enabled;  // --weight-smoothing: B smoothed, A kept
         if (smooth)
             temporal = smooth_temporal_weights(temporal, m_settings.weight_smoothing, m_report.weight_smoothing);
+        const Eigen::MatrixXd temporal_rank = temporal.leftCols(rank);  // N modes: sigma's residual
         Eigen::VectorXd leverages =
             m_training || smooth
                 ? training_leverages(m_training ? m_training->projector(basis, rank) : basis.temporal.leftCols(rank),
-                                     temporal)
+                                     temporal_rank)
                 : lowrank::leverages(basis, rank);
         int frames = m_shape.frames;
         std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
@@ -421,11 +444,13 @@ private:
             m_report.shrinkage = lowrank::optimal_shrinkage_factors(basis, m_report.rank.noise_sigma, rank);
         // With the mode filter, pass 2 also projects on the surveyed modes: its noise
         // estimate needs the energy they leave.
-        const int projected = filter ? std::max(rank, m_filter_modes) : rank;
+        const int projected = filter ? std::max(rebuild_modes, m_filter_modes) : rank;
+        if (rank_map)
+            m_report.rank_map.largest_rank = rebuild_modes;
         Eigen::MatrixXd temporal_projected =
             m_training ? m_training->projector(basis, projected) : basis.temporal.leftCols(projected);
         Band band;
-        std::vector<float> rebuilt, sigma, kept_noise;
+        std::vector<float> rebuilt, sigma, kept_noise, ranks;
         for (int row = 0; row < m_shape.height; row += plan.band_rows) {
             int end = std::min(m_shape.height, row + plan.band_rows);
             Band& data = band_with_halo(band, row, end);
@@ -439,7 +464,7 @@ private:
             rebuilt.resize(band_samples);
             lowrank::MutableBandView rebuilt_view{rebuilt.data(), data.rows, frames, data.rows};
             // The unfiltered rebuild of the whole band: sigma reads its residual.
-            lowrank::rebuild_from_coefficients({coefficients.data(), data.rows, rank, data.rows}, temporal,
+            lowrank::rebuild_from_coefficients({coefficients.data(), data.rows, rank, data.rows}, temporal_rank,
                                                rebuilt_view);
             // Sigma only for the band's own rows, laid out like the rebuilt band.
             std::int64_t offset = (row - data.row_begin) * row_samples;
@@ -448,7 +473,8 @@ private:
             lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
             lowrank::BandView kept_noise_view{};
             if (filter) {
-                filter_band(coefficients, data, temporal, rank, row, end, kept_noise);
+                filter_band(coefficients, data, temporal, rebuild_modes, row, end, kept_noise,
+                            rank_map ? &ranks : nullptr);
                 kept_noise_view = {kept_noise.data(), sigma_view.rows, frames, sigma_view.rows};
             }
             lowrank::confidence_band(noisy, rebuilt_view.view(), shape, leverages, rank, row - data.row_begin,
@@ -457,8 +483,9 @@ private:
                 for (std::int64_t i = 0; i < sigma_view.rows; ++i)
                     coefficients[j * data.rows + offset + i] *= static_cast<float>(m_report.shrinkage[j]);
             if (filter || m_settings.optimal_shrinkage)  // the band's own rows from the changed coefficients
-                lowrank::rebuild_from_coefficients({coefficients.data() + offset, sigma_view.rows, rank, data.rows},
-                                                   temporal, {rebuilt.data() + offset, sigma_view.rows, frames, data.rows});
+                lowrank::rebuild_from_coefficients(
+                    {coefficients.data() + offset, sigma_view.rows, filter ? rebuild_modes : rank, data.rows}, temporal,
+                    {rebuilt.data() + offset, sigma_view.rows, frames, data.rows});
             m_report.non_negative += make_non_negative({rebuilt.data() + offset, sigma_view.rows, frames, data.rows},
                                                        m_settings.non_negative, m_settings.non_negative_floor);
 
@@ -468,8 +495,14 @@ private:
             });
             if (m_sink.wants_modes())
                 write_modes(coefficients, data, basis, rank, row, end, offset);
+            if (rank_map) {
+                m_sink.write_rank_rows(row, end, ranks.data());
+                m_report.rank_map.add(ranks);
+            }
             m_progress.advance(end - row);
         }
+        if (rank_map)
+            m_report.rank_map.finish();
         m_progress.end();
     }
 

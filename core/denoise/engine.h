@@ -17,6 +17,7 @@
 #include "core/denoise/frame_stream.h"
 #include "core/denoise/mode_filter.h"
 #include "core/denoise/non_negative.h"
+#include "core/denoise/rank_map.h"
 #include "core/denoise/weight_smoothing.h"
 #include "core/lowrank/outliers.h"
 #include "core/lowrank/randomized_svd.h"
@@ -66,6 +67,8 @@ struct Settings {
     /// --train-frames: ascending frame indices the modes are computed from (empty:
     /// all); every frame is projected on them (training.h). Gram solver, no mode filter.
     std::vector<int> training_frames;
+    /// --rank-map: a per-pixel fractional rank (rank_map.h); needs the mode filter.
+    RankMapOptions rank_map;
     /// --weight-smoothing: smooth each rebuilt mode's temporal weights over time
     /// (weight_smoothing.h).
     WeightSmoothingOptions weight_smoothing;
@@ -94,6 +97,7 @@ struct Report {
     FeatureGuideSummary feature_guide;  ///< the features that guided it (empty: none)
     NonNegativeCounts non_negative;      ///< what --non-negative changed
     std::vector<double> shrinkage;       ///< per kept mode η(σ_j)/σ_j (empty: hard truncation)
+    RankMapSummary rank_map;             ///< the per-pixel ranks (largest_rank 0: no map)
     WeightSmoothingPlan weight_smoothing;  ///< what --weight-smoothing did per kept mode
     double seconds_filter_survey = 0;  ///< the mode filter's SURE pass
     double seconds_statistics = 0;  ///< pass 1 (read + clean + Gram)

@@ -101,6 +101,12 @@ public:
     }
     /// Whether write_mode_rows should be called.
     virtual bool wants_modes() const { return false; }
+    /// Rows of the per-pixel rank map (rank_map.h), one value per pixel. Only called
+    /// when the run makes a rank map.
+    virtual void write_rank_rows(int row_begin, int row_end, const float* ranks)
+    {
+        (void)row_begin, (void)row_end, (void)ranks;
+    }
 };
 
 /// A FrameSink that hands everything on to another unchanged (see ForwardingSource).
@@ -117,6 +123,10 @@ public:
         m_inner.write_mode_rows(row_begin, row_end, modes, spatial_modes);
     }
     bool wants_modes() const override { return m_inner.wants_modes(); }
+    void write_rank_rows(int row_begin, int row_end, const float* ranks) override
+    {
+        m_inner.write_rank_rows(row_begin, row_end, ranks);
+    }
 
 protected:
     FrameSink& m_inner;

@@ -5,6 +5,7 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/mode_filter.cpp)
 target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/non_negative.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/rank_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/segments.cpp
   ${CMAKE_CURRENT_LIST_DIR}/training.cpp
   ${CMAKE_CURRENT_LIST_DIR}/transform.cpp

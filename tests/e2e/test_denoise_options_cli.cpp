@@ -5,6 +5,7 @@
 // planted cut, --weight-smoothing lowers flicker and keeps a lighting step,
 // --whiten finds a Cycles-style variance layer and keeps a quiet region's mode;
 // --mode-filter-guides finds Cycles-style features and keeps an albedo edge;
+// --rank-map writes its map and summary;
 // bad values and combinations exit 2 with one line naming the
 // option and write nothing.
 #include "tests/tools/testkit.h"
@@ -387,6 +388,35 @@ TEST_CASE("denoise --mode-filter-guides: Cycles-style albedo and normal found by
     CHECK(with_guides < 0.7 * without);
 }
 
+TEST_CASE("denoise --rank-map: one 'rank' channel, never below N, summarised in the JSON")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    auto result = run_modestack("denoise " + dir.file("in.####.exr") + " -q --rank 2 --rank-map " +
+                                dir.file("rank.exr") + " --json " + dir.file("s.json") + " -o " +
+                                dir.file("out/d.####.exr"));
+    REQUIRE_MESSAGE(result.exit_code == 0, result.err);
+    std::vector<float> ranks = testkit::read_channels(dir.file("rank.exr"), {"rank"});
+    REQUIRE(ranks.size() == std::size_t(kWidth) * kHeight);
+    auto summary = load_json(dir.file("s.json"))["rank_map"];
+    const int largest = summary["largest_rank"].get<int>();
+    CHECK(largest >= 2);
+    double sum = 0;
+    for (float rank : ranks) {
+        CHECK(rank >= 2.0f);
+        CHECK(rank <= static_cast<float>(largest));
+        sum += rank;
+    }
+    CHECK(summary["mean"].get<double>() == doctest::Approx(sum / ranks.size()).epsilon(1e-5));
+    CHECK(summary["file"] == dir.file("rank.exr"));
+    std::int64_t counted = 0;
+    for (const auto& count : summary["pixels_per_whole_rank"])
+        counted += count.get<std::int64_t>();
+    CHECK(counted == std::int64_t(kWidth) * kHeight);
+    for (const std::string& name : testkit::list_directory(dir.path()))  // nothing left under a temporary name
+        CHECK(name.find("modestack-tmp") == std::string::npos);
+}
+
 TEST_CASE("denoise method options: bad values and combinations exit 2 with one line, nothing written")
 {
     TempDir dir;
@@ -420,6 +450,8 @@ TEST_CASE("denoise method options: bad values and combinations exit 2 with one l
         {"--whiten on --transform log", "--whiten on cannot be combined with --transform log"},
         {"--mode-filter-guides albedo,shadows", "--mode-filter-guides 'shadows'"},
         {"--mode-filter-guides depth,depth", "--mode-filter-guides names 'depth' twice"},
+        {"--no-mode-filter --rank-map " + dir.file("r.exr"), "--rank-map needs the mode filter"},
+        {"--segments auto --rank-map " + dir.file("r.exr"), "--rank-map cannot be combined with --segments"},
     };
     for (const Case& c : cases) {
         CAPTURE(c.arguments);
