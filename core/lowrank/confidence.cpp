@@ -14,15 +14,15 @@
 namespace modestack::lowrank {
 namespace {
 
-// Residual r = x − x̂ of frame t at (y, k), k = x·channels + c.
-struct Residual {
-    const float* noisy;
-    const float* rebuilt;
-    std::int64_t row_length;
+// Image rows [first_row, first_row + rows) of one frame's samples, in double:
+// each value is computed once, although every window around it reads it.
+struct Rows {
+    std::vector<double> values;
+    int first_row = 0;
+    std::int64_t row_length = 0;
     double operator()(int y, std::int64_t k) const
     {
-        std::int64_t i = y * row_length + k;
-        return static_cast<double>(noisy[i]) - rebuilt[i];
+        return values[static_cast<std::size_t>((y - first_row) * row_length + k)];
     }
 };
 
@@ -30,7 +30,7 @@ struct Residual {
 // at the band), squared and divided by the white-noise gain 1 + 1/n, so that its
 // expectation is the residual's noise variance σ²(1 − h_t). Lighting the modes miss
 // is smooth in space and mostly cancels here, unlike in r² itself.
-double high_pass_power(const Residual& residual, const ImageBandShape& shape, int y, std::int64_t k)
+double high_pass_power(const Rows& residual, const ImageBandShape& shape, int y, std::int64_t k)
 {
     const int x = static_cast<int>(k / shape.channels);
     double neighbours = 0;
@@ -51,8 +51,7 @@ double high_pass_power(const Residual& residual, const ImageBandShape& shape, in
 
 // Writes the mean over the (2·radius+1)² window (clipped at the band) of
 // sample(y, k) for the output rows of frame t into `out`'s frame t.
-template <typename Sample>
-void windowed_mean(const Sample& sample, const ImageBandShape& shape, int radius, int valid_y0, int valid_y1,
+void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, int valid_y0, int valid_y1,
                    float* out_frame, std::vector<double>& column_sum)
 {
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
@@ -107,14 +106,28 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
     // high-pass power (into noise_power), both per pixel and channel.
     throw_if_cancelled();
     std::vector<float> noise_power(static_cast<std::size_t>(sigma.rows) * frames);
+    // The windows read rows [window_first, window_last]; the high-pass one row more.
+    const int window_first = std::max(0, valid_y0 - options.radius);
+    const int window_last = std::min(shape.height - 1, valid_y1 - 1 + options.radius);
+    const int residual_first = std::max(0, window_first - 1), residual_last = std::min(shape.height - 1, window_last + 1);
     tbb::parallel_for(tbb::blocked_range<int>(0, frames, 1), [&](const tbb::blocked_range<int>& range) {
         std::vector<double> column_sum(static_cast<std::size_t>(row_length));
+        Rows residual{{}, residual_first, row_length}, power{{}, window_first, row_length};
+        residual.values.resize(static_cast<std::size_t>((residual_last - residual_first + 1) * row_length));
+        power.values.resize(static_cast<std::size_t>((window_last - window_first + 1) * row_length));
         for (int t = range.begin(); t != range.end(); ++t) {
-            Residual residual{noisy.data + t * noisy.frame_stride, rebuilt.data + t * rebuilt.frame_stride, row_length};
-            windowed_mean([&](int y, std::int64_t k) { return residual(y, k); }, shape,
-                          options.radius, valid_y0, valid_y1, sigma.data + t * sigma.frame_stride, column_sum);
-            windowed_mean([&](int y, std::int64_t k) { return high_pass_power(residual, shape, y, k); }, shape,
-                          options.radius, valid_y0, valid_y1, noise_power.data() + t * sigma.rows, column_sum);
+            const float* noisy_frame = noisy.data + t * noisy.frame_stride;
+            const float* rebuilt_frame = rebuilt.data + t * rebuilt.frame_stride;
+            for (std::int64_t i = residual_first * row_length, j = 0; i < (residual_last + 1) * row_length; ++i, ++j)
+                residual.values[static_cast<std::size_t>(j)] = static_cast<double>(noisy_frame[i]) - rebuilt_frame[i];
+            for (int y = window_first; y <= window_last; ++y)
+                for (std::int64_t k = 0; k < row_length; ++k)
+                    power.values[static_cast<std::size_t>((y - window_first) * row_length + k)] =
+                        high_pass_power(residual, shape, y, k);
+            windowed_mean(residual, shape, options.radius, valid_y0, valid_y1, sigma.data + t * sigma.frame_stride,
+                          column_sum);
+            windowed_mean(power, shape, options.radius, valid_y0, valid_y1, noise_power.data() + t * sigma.rows,
+                          column_sum);
         }
     });
 
