@@ -68,6 +68,31 @@ std::vector<int> all_frames()
     return frames;
 }
 
+// Σ over every frame of `pattern` (printf form) of the squared error of the
+// Cycles-style ViewLayer.DiffInd channels against truth(frame, x, y, c), in
+// columns [x0, x1); `count` receives the number of samples.
+template <typename Truth>
+double diffind_squared_error(const std::string& pattern, int x0, int x1, Truth truth, int* count = nullptr)
+{
+    double sum = 0;
+    int samples = 0;
+    for (int frame = 1; frame <= kFrames; ++frame) {
+        char name[4096];
+        std::snprintf(name, sizeof name, pattern.c_str(), frame);
+        std::vector<float> values =
+            testkit::read_channels(name, {"ViewLayer.DiffInd.R", "ViewLayer.DiffInd.G", "ViewLayer.DiffInd.B"});
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = x0; x < x1; ++x)
+                for (int c = 0; c < 3; ++c, ++samples) {
+                    const double error = values[(size_t(y) * kWidth + x) * 3 + c] - truth(frame, x, y, c);
+                    sum += error * error;
+                }
+    }
+    if (count)
+        *count = samples;
+    return sum;
+}
+
 nlohmann::json load_json(const std::string& path)
 {
     std::ifstream file(path);
@@ -302,20 +327,8 @@ TEST_CASE("denoise --whiten: found by name in Cycles-style layers, keeps the qui
           doctest::Approx(noisy_deviation / quiet_deviation).epsilon(1e-4));
     CHECK(load_json(dir.file("off.json"))["method"]["whiten"]["mode"] == "off");
     auto quiet_error = [&](const std::string& pattern) {
-        double sum = 0;
         int count = 0;
-        for (int frame = 1; frame <= kFrames; ++frame) {
-            char name[4096];
-            std::snprintf(name, sizeof name, pattern.c_str(), frame);
-            std::vector<float> values =
-                testkit::read_channels(name, {"ViewLayer.DiffInd.R", "ViewLayer.DiffInd.G", "ViewLayer.DiffInd.B"});
-            for (int y = 0; y < kHeight; ++y)
-                for (int x = kWidth / 2 + 1; x < kWidth; ++x)
-                    for (int c = 0; c < 3; ++c, ++count) {
-                        const double error = values[(size_t(y) * kWidth + x) * 3 + c] - truth(frame, x, y, c);
-                        sum += error * error;
-                    }
-        }
+        const double sum = diffind_squared_error(pattern, kWidth / 2 + 1, kWidth, truth, &count);
         return sum / count;
     };
     const double off_error = quiet_error(dir.file("off/d.%04d.exr")), on_error = quiet_error(dir.file("on/d.%04d.exr"));
@@ -368,20 +381,7 @@ TEST_CASE("denoise --mode-filter-guides: Cycles-style albedo and normal found by
     CHECK(on["feature_frames"].size() == 4);
     CHECK(load_json(dir.file("off.json"))["mode_filter"]["feature_guides"].empty());
     auto edge_error = [&](const std::string& pattern) {
-        double sum = 0;
-        for (int frame = 1; frame <= kFrames; ++frame) {
-            char name[4096];
-            std::snprintf(name, sizeof name, pattern.c_str(), frame);
-            std::vector<float> values =
-                testkit::read_channels(name, {"ViewLayer.DiffInd.R", "ViewLayer.DiffInd.G", "ViewLayer.DiffInd.B"});
-            for (int y = 0; y < kHeight; ++y)
-                for (int x = kWidth / 2 - 2; x < kWidth / 2 + 2; ++x)
-                    for (int c = 0; c < 3; ++c) {
-                        const double error = values[(size_t(y) * kWidth + x) * 3 + c] - truth(frame, x, y, c);
-                        sum += error * error;
-                    }
-        }
-        return sum;
+        return diffind_squared_error(pattern, kWidth / 2 - 2, kWidth / 2 + 2, truth);
     };
     const double with_guides = edge_error(dir.file("on/d.%04d.exr")), without = edge_error(dir.file("off/d.%04d.exr"));
     MESSAGE("squared error next to the edge: without guides " << without << ", with " << with_guides);
