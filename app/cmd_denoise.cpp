@@ -6,8 +6,10 @@
 // (app/color_adapters.h).
 #include "app/color_adapters.h"
 #include "app/command.h"
+#include "app/denoise_stages.h"
 #include "app/memory_budget.h"
 #include "app/method_options.h"
+#include "app/mpi_job.h"
 #include "app/option_values.h"
 #include "app/report/denoise_report.h"
 #include "app/report/html_report.h"
@@ -56,7 +58,9 @@ struct DenoiseOptions {
     std::string colorspace;
     std::string ocio_config;
     MethodOptions method_options;
+    StageOptions stage;
     CommonOptions common;
+    const CLI::App* command = nullptr;  ///< for the fingerprint of --stage
 };
 
 // --mode-filter-guides: auto (every feature the input has), none, or a list.
@@ -256,8 +260,14 @@ int run_denoise(const DenoiseOptions& options)
     io::use_single_threaded_exr_files();  // F files open at once, frames read in parallel by us
     reuse_freed_memory();
 
-    io::FrameSequence input = io::find_input_sequence(options.input, options.frames);
-    io::FrameSequence output = io::output_sequence(options.output, input.frames);
+    // --stage: a farm task (denoise_stages.h); stats and solve write one file, -o.
+    std::optional<StageRun> staged;
+    if (!options.stage.stage.empty())
+        staged.emplace(options.stage, *options.command);
+    const bool writes_frames = !staged || staged->writes_frames();
+    io::FrameSequence input =
+        io::find_input_sequence(options.input, staged ? staged->shot_frames(options.frames) : options.frames);
+    io::FrameSequence output = writes_frames ? io::output_sequence(options.output, input.frames) : io::FrameSequence{};
     if (input.frames.size() < 3)
         throw bad_input(options.input, fmt::format("denoising needs at least 3 frames, found {}", input.frames.size()));
     if (settings.rank.rule == lowrank::RankRule::Fixed &&
@@ -269,7 +279,9 @@ int run_denoise(const DenoiseOptions& options)
         throw usage_error(fmt::format("--rank {}: the number of modes must be at least 1", settings.rank.fixed_rank));
     apply_training_frames(options.method_options, input.frames, settings);
     SegmentRun segments = plan_segments(options.method_options, input.frames, !options.save_modes.empty());
-    io::check_outputs(output.files, input.files);
+    const bool output_in_memory = staged && !staged->writes_frames() && !staged->writes_file();  // an MPI rank
+    if (!output_in_memory)
+        io::check_outputs(writes_frames ? output.files : std::vector<std::string>{options.output}, input.files);
     if (!options.report_path.empty())
         report::check_report_path(options.report_path, input.files);
     if (!options.save_modes.empty())
@@ -279,15 +291,20 @@ int run_denoise(const DenoiseOptions& options)
     io::SequenceReader reader(input, options.layers);
     DenoiseColor color = choose_denoise_color(options.ocio_config, options.colorspace, reader);
 
-    std::vector<std::string> paths = output.files;
+    if (staged)
+        staged->prepare(input, reader);
+
+    std::vector<std::string> paths = writes_frames ? output.files : std::vector<std::string>(input.files.size());
+    if (staged && writes_frames)
+        staged->keep_written_frames(options.frames, input.frames, paths);
     int frames_written = 0;
     for (std::string& path : paths) {
-        if (options.skip_existing && std::filesystem::exists(path))
+        if (path.empty() || (options.skip_existing && std::filesystem::exists(path)))
             path.clear();
         else
             ++frames_written;
     }
-    if (frames_written == 0 && options.save_modes.empty()) {
+    if (frames_written == 0 && options.save_modes.empty() && writes_frames) {
         context.progress().warn(fmt::format("every output of {} exists already (--skip-existing): nothing to do",
                                             options.output));
         return 0;
@@ -322,9 +339,13 @@ int run_denoise(const DenoiseOptions& options)
     TransformStream transformed(transform, collector ? collector->source() : stream.source(),
                                 collector ? collector->sink() : stream.sink(), settings, options.input,
                                 options.method_options);
+    if (staged)
+        settings.stage = &staged->task();
     denoise::Report report =
         run_segmented(segments, transformed.source(), transformed.sink(), settings, context.progress());
     sink.commit();
+    if (staged)
+        staged->finish(options.output);
     if (report.outliers.non_finite > 0)
         context.progress().warn(fmt::format("{} NaN/Inf values in {} were replaced by their pixel's temporal median",
                                             report.outliers.non_finite, options.input));
@@ -354,12 +375,19 @@ int run_denoise(const DenoiseOptions& options)
         nlohmann::ordered_json json = summary_json(options, reader, report, seconds, frames_written, max_memory_bytes);
         json["color"] = color_json(color);
         json["method"] = method_json(transformed, settings, report, segments, input.frames);
+        if (staged)
+            json["farm"] = staged->json();
         io::write_text_file(options.json_path, json.dump(2) + "\n");
     }
-    if (!options.common.quiet)
+    if (staged && !writes_frames) {
+        if (!options.common.quiet && !output_in_memory)
+            std::fprintf(stderr, "--stage %s of %d frames written to %s in %.2f s\n",
+                         denoise::stage_name(staged->stage()), report.shape.frames, options.output.c_str(), seconds);
+    } else if (!options.common.quiet) {
         std::fprintf(stderr, "denoised %d of %d frames with N = %d modes (%s rule, %s solver) in %.2f s\n",
                      frames_written, report.shape.frames, report.rank.rank, report.rank.rule.c_str(),
                      report.solver.c_str(), seconds);
+    }
     if (!options.common.quiet && settings.non_negative != denoise::NonNegativeMode::Off)
         std::fprintf(stderr, "--non-negative changed %lld values in %lld pixel channels\n",
                      static_cast<long long>(report.non_negative.clamped + report.non_negative.scaled),
@@ -379,7 +407,9 @@ Subcommand add_denoise_command(CLI::App& parent)
         "denoise", "Denoise the selected layers of an EXR sequence with its temporal low-rank modes");
     command->add_option("SEQ", options->input, "Input frame sequence: name.####.exr, name.%04d.exr, name.@.exr")
         ->required();
-    command->add_option("-o,--output", options->output, "Output frame sequence (never an input)")->required();
+    command->add_option("-o,--output", options->output,
+                        "Output frame sequence (never an input); with --stage stats or solve, the task's file")
+        ->required();
     command->add_option("--layer", options->layers,
                         "Layer to denoise: NAME.R/G/B or <prefix>.NAME.<ch> (Cycles DiffInd); repeatable. "
                         "Default: the only RGB layer");
@@ -393,7 +423,9 @@ Subcommand add_denoise_command(CLI::App& parent)
                         "Memory of the whole process (512M, 2G; default auto: a quarter of the machine's or "
                         "container's): the shot is kept if it fits in what the program and open files leave, "
                         "else streamed in bands");
-    command->add_option("--frames", options->frames, "Only these frames: 1-48, 1001-1100, 1-100x2, 1,3,7-9");
+    command->add_option("--frames", options->frames,
+                        "Only these frames: 1-48, 1001-1100, 1-100x2, 1,3,7-9; with --stage write, the frames of "
+                        "the solve file's shot to write (a range or I/K)");
     command->add_option("--json", options->json_path, "Write a JSON summary: N and why, spectrum, counts, timings");
     command->add_option("--save-modes", options->save_modes,
                         "Write the spatial modes (mode.NN.exr) and temporal weights (CSV, JSON) to this directory");
@@ -442,8 +474,27 @@ Subcommand add_denoise_command(CLI::App& parent)
                         "OpenColorIO config file; wins over $OCIO, which wins over the config shipped with "
                         "modestack");
     add_method_options(*command, options->method_options);
+    add_stage_options(*command, options->stage);
     add_common_options(*command, options->common);
-    return {command, [options] { return run_denoise(*options); }};
+    options->command = command;
+    return {command, [options] {
+                if (!started_by_mpirun())
+                    return run_denoise(*options);
+                if (!options->stage.stage.empty())
+                    throw usage_error("--stage is for farm tasks, one process each: under mpirun the ranks run "
+                                      "every stage themselves");
+                // mpirun -n K: each rank runs the farm stages on its share (mpi_job.h).
+                return run_mpi_denoise(options->frames, [&](const StageOptions& stage, const std::string& frames,
+                                                            bool lead) {
+                    DenoiseOptions task = *options;
+                    task.stage = stage;
+                    task.frames = frames;
+                    task.common.quiet = options->common.quiet || !lead;
+                    if (!lead || stage.stage != "write")
+                        task.json_path.clear();
+                    return run_denoise(task);
+                });
+            }};
 }
 
 }  // namespace modestack::app

@@ -1,4 +1,5 @@
 #include "core/denoise/engine.h"
+#include "core/denoise/block_gram.h"
 #include "core/denoise/training.h"
 
 #include "core/common/error.h"
@@ -52,7 +53,7 @@ public:
         int halo_rows = m_settings.sigma_radius + 1, plan_modes = largest_rank;
         m_filter_options = m_settings.mode_filter;
         if (m_settings.mode_filter.enabled) {
-            if (!m_settings.feature_guide.kinds.empty()) {
+            if (!m_settings.feature_guide.kinds.empty() && !in_stage(Stage::Statistics)) {
                 m_features.emplace(m_source, m_settings.feature_guide, m_progress);
                 m_filter_options.feature_channels = m_features->channels();
                 m_report.feature_guide = m_features->summary();
@@ -67,12 +68,18 @@ public:
             plan_bands(m_shape, m_settings.max_memory_bytes, halo_rows, plan_modes, m_source.band_bytes_per_row());
         Solver solver = m_settings.solver;
         if (solver == Solver::Auto)
-            solver = m_shape.frames >= m_settings.randomized_from_frames && m_settings.training_frames.empty()
+            solver = m_shape.frames >= m_settings.randomized_from_frames && m_settings.training_frames.empty() &&
+                             !m_settings.stage
                          ? Solver::RandomizedSvd
                          : Solver::Gram;
         m_report.solver = solver_name(solver);
 
         auto start = Clock::now();
+        if (in_stage(Stage::Statistics)) {
+            statistics_stage();
+            m_report.seconds_statistics = seconds_since(start);
+            return m_report;
+        }
         lowrank::Basis basis = solver == Solver::Gram ? gram_basis() : randomized_basis();
         m_report.seconds_statistics = seconds_since(start);
 
@@ -81,7 +88,10 @@ public:
         double survey_seconds = 0;
         if (m_settings.mode_filter.enabled) {
             auto survey_start = Clock::now();
-            survey_mode_filter(basis);
+            if (in_stage(Stage::Write))
+                restore_mode_filter_survey(basis);
+            else
+                survey_mode_filter(basis);
             survey_seconds = seconds_since(survey_start);
             m_report.seconds_filter_survey = survey_seconds;
         }
@@ -89,6 +99,8 @@ public:
         describe_basis(basis, rank);
         m_report.seconds_solve = seconds_since(start) - survey_seconds + m_solve_seconds;
         m_report.seconds_statistics -= m_solve_seconds;
+        if (in_stage(Stage::Solve))
+            return m_report;
 
         start = Clock::now();
         rebuild(basis, rank);
@@ -97,6 +109,70 @@ public:
     }
 
 private:
+    bool in_stage(Stage stage) const { return m_settings.stage && m_settings.stage->stage == stage; }
+
+    // What a farm task cannot do (each needs the whole shot in one process) and
+    // the inputs its stage needs.
+    void validate_stage() const
+    {
+        const StageTask& task = *m_settings.stage;
+        const std::string name = stage_name(task.stage);
+        if (m_settings.solver == Solver::RandomizedSvd)
+            throw usage_error(fmt::format("--stage {}: the farm stages use the gram solver, not --method rsvd", name));
+        if (!m_settings.training_frames.empty())
+            throw usage_error(fmt::format("--stage {} cannot be combined with --train-frames", name));
+        if (task.stage == Stage::Statistics &&
+            (task.row_begin < 0 || task.row_begin >= task.row_end || task.row_end > m_shape.height ||
+             task.row_begin % kStageBlockRows != 0 || (task.row_end % kStageBlockRows != 0 && task.row_end != m_shape.height)))
+            throw usage_error(fmt::format("--rows {}-{}: a statistics task covers whole blocks of {} rows of the {} "
+                                          "(first row a multiple of {}, last one before a multiple or the last row)",
+                                          task.row_begin, task.row_end - 1, kStageBlockRows, m_shape.height,
+                                          kStageBlockRows));
+        const int blocks = (m_shape.height + kStageBlockRows - 1) / kStageBlockRows;
+        if (task.stage == Stage::Solve && static_cast<int>(task.gram_blocks.size()) != blocks)
+            throw internal_error("the solve stage needs every block's sums");
+        if (task.stage == Stage::Write && !task.gram)
+            throw internal_error("the write stage needs the merged sums");
+        if (task.stage == Stage::Write && m_settings.mode_filter.enabled &&
+            static_cast<int>(task.survey_rows.size()) != m_shape.height)
+            throw internal_error("the write stage needs the mode filter's survey of every row");
+    }
+
+    // --stage stats: pass 1 over the task's rows, each block's sums kept apart.
+    void statistics_stage()
+    {
+        StageTask& task = *m_settings.stage;
+        BlockGram gram(m_shape.frames, true);
+        m_progress.begin(fmt::format("statistics of rows {}-{}: reading {} frames", task.row_begin, task.row_end - 1,
+                                     m_shape.frames),
+                         task.row_end - task.row_begin);
+        Band band;
+        std::vector<float> scratch;
+        ++m_report.passes;
+        for (int row = task.row_begin; row < task.row_end; row += m_report.plan.band_rows) {
+            int end = std::min(task.row_end, row + m_report.plan.band_rows);
+            read_band(band, row, end, &m_report.outliers);
+            for_each_chunk(band, [&](int chunk_row, const lowrank::BandView& chunk) {
+                visit_whitened(band, chunk, scratch,
+                               [&](const lowrank::BandView& rows) { gram.add(chunk_row, rows); });
+            });
+            m_progress.advance(end - row);
+        }
+        m_progress.end();
+        gram.finish();
+        task.gram_blocks = std::move(gram.blocks());
+        task.outliers = m_report.outliers;
+    }
+
+    // --stage write: the survey the solve task made, without a pass over the shot.
+    void restore_mode_filter_survey(const lowrank::Basis& basis)
+    {
+        m_filter_modes = filter_survey_modes(basis);
+        SureSurvey survey(m_filter_options, m_shape.width, m_shape.height, m_shape.channels, m_filter_modes);
+        survey.restore_row_sums(0, m_settings.stage->survey_rows);
+        finish_mode_filter_survey(survey);
+    }
+
     void validate() const
     {
         if (m_shape.frames < 3)
@@ -115,6 +191,8 @@ private:
             throw usage_error("--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
         if (!m_settings.training_frames.empty())
             check_training_frames(m_settings, m_shape.frames);
+        if (m_settings.stage)
+            validate_stage();
         if (m_settings.whitening &&
             m_settings.whitening->size() != static_cast<size_t>(m_shape.width) * m_shape.height * m_shape.channels)
             throw internal_error("the whitening weights do not match the shot");
@@ -137,8 +215,11 @@ private:
         // later reads of a streamed shot redo only the marked rows (same input,
         // same result), instead of three medians for every sample again.
         const std::int64_t first_sample = static_cast<std::int64_t>(row_begin) * m_shape.width * m_shape.channels;
-        if (counts) {
-            std::uint8_t* marks = m_report.plan.in_memory ? nullptr : m_cleaned_samples.data() + first_sample;
+        if (!counts && m_cleaned_samples.empty()) {  // no pass 1 in this process (a farm task): clean in full
+            lowrank::clean_outliers(band.view(m_shape.frames), m_settings.outliers, nullptr);
+        } else if (counts) {
+            std::uint8_t* marks =
+                m_report.plan.in_memory || m_cleaned_samples.empty() ? nullptr : m_cleaned_samples.data() + first_sample;
             lowrank::OutlierCounts found = lowrank::clean_outliers(band.view(m_shape.frames), m_settings.outliers, marks);
             counts->non_finite += found.non_finite;
             counts->fireflies += found.fireflies;
@@ -191,8 +272,8 @@ private:
         m_progress.end();
     }
 
-    // Feeds a band to `add` in fixed chunks of kChunkRows image rows, so the
-    // summation order does not depend on the band height.
+    // Feeds a band to `add(first image row, chunk)` in fixed chunks of kChunkRows
+    // image rows, so the summation order does not depend on the band height.
     template <typename Add> void for_each_chunk(Band& band, Add&& add)
     {
         std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
@@ -200,7 +281,7 @@ private:
             int end = std::min(band.row_end, row + kChunkRows);
             lowrank::BandView chunk{band.data + (row - band.row_begin) * row_samples, (end - row) * row_samples,
                                     m_shape.frames, band.stride};
-            add(chunk);
+            add(row, chunk);
         }
     }
 
@@ -230,23 +311,52 @@ private:
 
     lowrank::Basis gram_basis()
     {
+        if (m_settings.stage)
+            return staged_gram_basis();
         const bool training = !m_settings.training_frames.empty();  // --train-frames: training.h
-        lowrank::GramAccumulator gram(training ? 1 : m_shape.frames);
+        BlockGram gram(training ? 1 : m_shape.frames, false);
         if (training)
             m_training.emplace(m_shape.frames, m_settings.training_frames);
         std::vector<float> scratch;
         for_each_band([&](Band& band) {
-            for_each_chunk(band, [&](const lowrank::BandView& chunk) {
+            for_each_chunk(band, [&](int row, const lowrank::BandView& chunk) {
                 visit_whitened(band, chunk, scratch, [&](const lowrank::BandView& rows) {
-                    training ? m_training->add(rows) : gram.add(rows);
+                    training ? m_training->add(rows) : gram.add(row, rows);
                 });
             });
         });
+        gram.finish();
         auto start = Clock::now();
-        lowrank::Basis basis = training ? m_training->basis() : lowrank::basis_from_gram(gram);
+        lowrank::Basis basis = training ? m_training->basis() : lowrank::basis_from_gram(gram.total());
         basis.passes = 1;
         m_solve_seconds = seconds_since(start);
         return basis;
+    }
+
+    // --stage solve and write: the modes from the statistics tasks' sums, merged in
+    // the order gram_basis() merges its blocks.
+    lowrank::Basis staged_gram_basis()
+    {
+        StageTask& task = *m_settings.stage;
+        auto start = Clock::now();
+        if (task.stage == Stage::Solve)
+            task.gram = BlockGram::merge(task.gram_blocks, m_shape.frames);
+        m_report.outliers = task.outliers;
+        lowrank::Basis basis = lowrank::basis_from_gram(*task.gram);
+        basis.passes = 1;
+        m_solve_seconds = seconds_since(start);
+        return basis;
+    }
+
+    // The kept shot, read and cleaned when no pass 1 read it (a farm task).
+    void ensure_whole_shot()
+    {
+        if (!m_report.plan.in_memory || m_whole.data)
+            return;
+        ++m_report.passes;
+        m_progress.begin(fmt::format("reading {} frames", m_shape.frames), m_shape.height);
+        read_band(m_whole, 0, m_shape.height, nullptr);
+        m_progress.end();
     }
 
     lowrank::Basis randomized_basis()
@@ -254,7 +364,9 @@ private:
         lowrank::BandPass pass = [&](const std::function<void(const lowrank::BandView&)>& visit) {
             std::vector<float> scratch;
             for_each_band([&](Band& band) {
-                for_each_chunk(band, [&](const lowrank::BandView& chunk) { visit_whitened(band, chunk, scratch, visit); });
+                for_each_chunk(band, [&](int, const lowrank::BandView& chunk) {
+                    visit_whitened(band, chunk, scratch, visit);
+                });
             });
         };
         int modes = std::min(m_shape.frames - 1, std::max(m_settings.randomized_modes,
@@ -333,6 +445,7 @@ private:
         m_filter_modes = filter_survey_modes(basis);
         Eigen::MatrixXd temporal = basis.temporal.leftCols(m_filter_modes);
         SureSurvey survey(m_filter_options, m_shape.width, m_shape.height, m_shape.channels, m_filter_modes);
+        ensure_whole_shot();
         if (!plan.in_memory)
             ++m_report.passes;
         m_progress.begin("mode filter: choosing widths", m_shape.height);
@@ -353,6 +466,14 @@ private:
             m_progress.advance(end - row);
         }
         m_progress.end();
+        if (in_stage(Stage::Solve))
+            m_settings.stage->survey_rows = survey.row_sums(0, m_shape.height);
+        finish_mode_filter_survey(survey);
+    }
+
+    // The filter per mode and, for auto rank, N from a finished survey.
+    void finish_mode_filter_survey(const SureSurvey& survey)
+    {
         bool fixed = m_settings.rank.rule == lowrank::RankRule::Fixed;
         m_report.mode_filter = survey.finish(fixed ? m_settings.rank.fixed_rank : 0);
         if (!fixed) {
@@ -437,6 +558,7 @@ private:
         confidence.radius = m_settings.sigma_radius;
 
         bool kept = plan.in_memory;  // pass 2 reuses the kept shot: no second read
+        ensure_whole_shot();
         if (!kept)
             ++m_report.passes;
         m_sink.begin({rank, m_report.rank.rule, m_report.solver});

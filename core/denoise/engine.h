@@ -18,6 +18,7 @@
 #include "core/denoise/mode_filter.h"
 #include "core/denoise/non_negative.h"
 #include "core/denoise/rank_map.h"
+#include "core/denoise/stage_task.h"
 #include "core/denoise/weight_smoothing.h"
 #include "core/lowrank/outliers.h"
 #include "core/lowrank/randomized_svd.h"
@@ -78,6 +79,9 @@ struct Settings {
     /// --report: also report pt(t, j) for j < max(2N, report_modes), capped at F − 1
     /// and at the modes found (Report::preview_temporal_modes, the rank slider); 0: none.
     int report_modes = 0;
+    /// A farm task's share of the run (stage_task.h): its inputs are read and its
+    /// outputs written here; null: the whole run. Gram solver, no --train-frames.
+    StageTask* stage = nullptr;
 };
 
 /// What a run did and found, for the JSON summary and the report.
@@ -105,7 +109,7 @@ struct Report {
     double seconds_rebuild = 0;     ///< pass 2 (read + rebuild + sigma + write)
 };
 
-/// Denoises `source` into `sink`. Throws modestack::Error on bad settings
+/// Denoises `source` into `sink` (with Settings::stage, does that task's share). Throws modestack::Error on bad settings
 /// (fewer than 3 frames, rank out of range, memory too small) and cancellation.
 Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& settings, Progress& progress);
 

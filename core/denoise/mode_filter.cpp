@@ -338,6 +338,29 @@ void SureSurvey::add_band(const BandView& coefficients, const std::vector<float>
     });
 }
 
+std::size_t SureSurvey::row_sum_length() const
+{
+    return static_cast<std::size_t>(m_modes) * m_candidates.size() * 2 + 2 * m_modes + 1;
+}
+
+std::vector<std::vector<double>> SureSurvey::row_sums(int row_begin, int row_end) const
+{
+    if (row_begin < 0 || row_end > m_height || row_begin > row_end)
+        throw internal_error("SureSurvey::row_sums: rows out of range");
+    return {m_rows.begin() + row_begin, m_rows.begin() + row_end};
+}
+
+void SureSurvey::restore_row_sums(int row_begin, std::vector<std::vector<double>> sums)
+{
+    if (row_begin < 0 || row_begin + static_cast<std::int64_t>(sums.size()) > m_height)
+        throw internal_error("SureSurvey::restore_row_sums: rows out of range");
+    for (std::size_t i = 0; i < sums.size(); ++i) {
+        if (!sums[i].empty() && sums[i].size() != row_sum_length())
+            throw internal_error("SureSurvey::restore_row_sums: a row does not match the survey");
+        m_rows[row_begin + i] = std::move(sums[i]);
+    }
+}
+
 ModeFilterPlan SureSurvey::finish(int fixed_rank) const
 {
     const int candidates = static_cast<int>(m_candidates.size());

@@ -1,5 +1,6 @@
 target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/band_plan.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/block_gram.cpp
   ${CMAKE_CURRENT_LIST_DIR}/engine.cpp
   ${CMAKE_CURRENT_LIST_DIR}/feature_guide.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mode_filter.cpp)
@@ -7,6 +8,7 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/non_negative.cpp
   ${CMAKE_CURRENT_LIST_DIR}/rank_map.cpp
   ${CMAKE_CURRENT_LIST_DIR}/segments.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/stage_task.cpp
   ${CMAKE_CURRENT_LIST_DIR}/training.cpp
   ${CMAKE_CURRENT_LIST_DIR}/transform.cpp
   ${CMAKE_CURRENT_LIST_DIR}/weight_smoothing.cpp

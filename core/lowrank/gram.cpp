@@ -65,4 +65,21 @@ void GramAccumulator::merge(const GramAccumulator& other)
     m_tiles += other.m_tiles;
 }
 
+GramAccumulator GramAccumulator::from_state(const State& state)
+{
+    const Eigen::Index frames = state.gram.rows();
+    if (frames < 1 || state.gram.cols() != frames || state.frame_sum.size() != frames ||
+        state.half_gram[0].rows() != frames || state.half_gram[0].cols() != frames ||
+        state.half_gram[1].rows() != frames || state.half_gram[1].cols() != frames || state.rows < 0 ||
+        state.tiles < 0)
+        throw internal_error("GramAccumulator::from_state: inconsistent sizes");
+    GramAccumulator accumulator(static_cast<int>(frames));
+    accumulator.m_gram = state.gram;
+    accumulator.m_half_gram = state.half_gram;
+    accumulator.m_frame_sum = state.frame_sum;
+    accumulator.m_rows = state.rows;
+    accumulator.m_tiles = state.tiles;
+    return accumulator;
+}
+
 } // namespace modestack::lowrank

@@ -45,6 +45,20 @@ public:
     /// Number of frames F.
     int frames() const { return static_cast<int>(m_gram.rows()); }
 
+    /// Everything the accumulator holds, for the farm's stage files (app/stage_files.h).
+    /// The matrices are exactly symmetric, so their lower triangles carry them.
+    struct State {
+        Eigen::MatrixXd gram;
+        std::array<Eigen::MatrixXd, 2> half_gram;
+        Eigen::VectorXd frame_sum;
+        std::int64_t rows = 0;
+        std::int64_t tiles = 0;
+    };
+    State state() const { return {m_gram, m_half_gram, m_frame_sum, m_rows, m_tiles}; }
+    /// The accumulator that state() came from; throws modestack::Error (internal) when
+    /// the sizes disagree.
+    static GramAccumulator from_state(const State& state);
+
 private:
     Eigen::MatrixXd m_gram;
     std::array<Eigen::MatrixXd, 2> m_half_gram;

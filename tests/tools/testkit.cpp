@@ -120,10 +120,12 @@ std::vector<std::string> read_channel_names(const std::string& path)
     return input->spec().channelnames;
 }
 
-CliResult run_modestack(const std::string& arguments)
+CliResult run_modestack(const std::string& arguments) { return run_modestack_under("", arguments); }
+
+CliResult run_modestack_under(const std::string& launcher, const std::string& arguments)
 {
     TempDir capture;
-    std::string command = fmt::format("{} {} >{} 2>{} </dev/null", MODESTACK_BINARY, arguments,
+    std::string command = fmt::format("{} {} {} >{} 2>{} </dev/null", launcher, MODESTACK_BINARY, arguments,
                                       capture.file("out"), capture.file("err"));
     int status = std::system(command.c_str());
     CliResult result;

@@ -60,6 +60,8 @@ struct CliResult {
 };
 /// Runs `modestack <arguments>` (arguments are passed to /bin/sh as written).
 CliResult run_modestack(const std::string& arguments);
+/// Runs `<launcher> modestack <arguments>`, e.g. under "mpirun -n 2".
+CliResult run_modestack_under(const std::string& launcher, const std::string& arguments);
 
 /// Files in a directory (names only, sorted), hidden ones included.
 std::vector<std::string> list_directory(const std::string& path);

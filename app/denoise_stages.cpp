@@ -1,0 +1,211 @@
+#include "app/denoise_stages.h"
+
+#include "core/common/error.h"
+#include "io/text_output.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <regex>
+#include <set>
+
+namespace modestack::app {
+namespace {
+
+denoise::Stage parse_stage(const std::string& name)
+{
+    for (denoise::Stage stage : {denoise::Stage::Statistics, denoise::Stage::Solve, denoise::Stage::Write})
+        if (name == denoise::stage_name(stage))
+            return stage;
+    throw usage_error(fmt::format("--stage '{}' is not one of stats, solve, write", name));
+}
+
+// "I/K" (1 ≤ I ≤ K): task I of K equal shares; false when `text` is not of that form.
+bool parse_share(const std::string& text, const std::string& option, int& index, int& count)
+{
+    std::smatch match;
+    if (!std::regex_match(text, match, std::regex(R"((\d+)/(\d+))")))
+        return false;
+    index = std::stoi(match[1]);
+    count = std::stoi(match[2]);
+    if (count < 1 || index < 1 || index > count)
+        throw usage_error(fmt::format("{} {}: write I/K with 1 <= I <= K", option, text));
+    return true;
+}
+
+// Share `index` of `count` of `items` things, in order: [begin, end).
+std::pair<int, int> share_of(int items, int index, int count)
+{
+    const auto at = [&](int k) { return static_cast<int>(static_cast<std::int64_t>(items) * k / count); };
+    return {at(index - 1), at(index)};
+}
+
+// The options that must agree between the tasks of a job: those given on the
+// command line, but not where the files are, what the task does, how fast or
+// how verbosely (none of which change a bit of the result).
+nlohmann::ordered_json method_options_given(const CLI::App& command)
+{
+    static const std::set<std::string> excluded{"SEQ",      "--output",  "--stage",        "--rows",
+                                                "--stats",  "--solve",   "--frames",       "--json",
+                                                "--threads", "--quiet",  "--max-memory",   "--skip-existing",
+                                                "--report", "--save-modes", "--help"};
+    nlohmann::ordered_json options = nlohmann::ordered_json::object();
+    for (const CLI::Option* option : command.get_options())
+        if (option->count() > 0 && !excluded.count(option->get_name()))
+            options[option->get_name()] = option->results();
+    return options;
+}
+
+nlohmann::ordered_json shot_json(const io::FrameSequence& input, const io::SequenceReader& reader)
+{
+    nlohmann::ordered_json files = nlohmann::ordered_json::array();
+    for (const std::string& file : input.files)
+        files.push_back({std::filesystem::path(file).filename().string(), std::filesystem::file_size(file)});
+    return {{"frames", io::describe_frames(input.frames)},
+            {"files", files},
+            {"width", reader.width()},
+            {"height", reader.height()},
+            {"channels", reader.selected_channel_names()}};
+}
+
+}  // namespace
+
+void add_stage_options(CLI::App& command, StageOptions& options)
+{
+    command.add_option("--stage", options.stage,
+                       "Run one farm task of the denoise (README, farm jobs): stats (-o the statistics of --rows), "
+                       "solve (-o the basis from every --stats file) or write (the outputs of --frames from "
+                       "--solve); the outputs are byte-identical to one run with the same options");
+    command.add_option("--rows", options.rows,
+                       "--stage stats: the rows of this task, Y0-Y1 (inclusive; Y0 a multiple of 64, Y1 + 1 too or "
+                       "the last row) or I/K (share I of K)");
+    command.add_option("--stats", options.stats, "--stage solve: every statistics file of the shot, once");
+    command.add_option("--solve", options.solve, "--stage write: the solve task's file");
+}
+
+StageRun::StageRun(const StageOptions& options, const CLI::App& command) : m_options(options), m_command(command)
+{
+    m_task.stage = parse_stage(options.stage);
+    const std::string name = denoise::stage_name(m_task.stage);
+    if (!options.rows.empty() && m_task.stage != denoise::Stage::Statistics)
+        throw usage_error(fmt::format("--rows belongs to --stage stats, not --stage {}", name));
+    if (!options.stats.empty() && m_task.stage != denoise::Stage::Solve)
+        throw usage_error(fmt::format("--stats belongs to --stage solve, not --stage {}", name));
+    if (!options.solve.empty() && m_task.stage != denoise::Stage::Write)
+        throw usage_error(fmt::format("--solve belongs to --stage write, not --stage {}", name));
+    if (m_task.stage == denoise::Stage::Statistics && options.rows.empty())
+        throw usage_error("--stage stats needs --rows Y0-Y1 or --rows I/K");
+    if (m_task.stage == denoise::Stage::Solve && options.stats.empty() && !options.stats_bytes)
+        throw usage_error("--stage solve needs the statistics files of the shot: --stats FILE...");
+    if (m_task.stage == denoise::Stage::Write && options.solve.empty() && !options.solve_bytes)
+        throw usage_error("--stage write needs the solve task's file: --solve FILE");
+    for (const char* option : {"--report", "--save-modes", "--rank-map", "--segments", "--train-frames"})
+        if (command.count(option) > 0)
+            throw usage_error(fmt::format("--stage cannot be combined with {}: run it on one machine", option));
+    if (options.stats_bytes)
+        m_statistics = *options.stats_bytes;
+    for (const std::string& path : options.stats)
+        m_statistics.push_back(read_stage_bytes(path));
+    if (options.solve_bytes)
+        m_solve = *options.solve_bytes;
+    else if (!options.solve.empty())
+        m_solve = read_stage_bytes(options.solve);
+}
+
+std::string StageRun::shot_frames(const std::string& frames_option) const
+{
+    return writes_frames() ? shot_frames_of_solve_file(m_solve) : frames_option;
+}
+
+int StageRun::keep_written_frames(const std::string& frames_option, const std::vector<int>& shot,
+                                  std::vector<std::string>& paths) const
+{
+    std::vector<bool> written(shot.size(), frames_option.empty());
+    int index = 0, count = 0;
+    if (parse_share(frames_option, "--frames", index, count)) {
+        auto [begin, end] = share_of(static_cast<int>(shot.size()), index, count);
+        std::fill(written.begin() + begin, written.begin() + end, true);
+    } else if (!frames_option.empty()) {
+        for (int frame : io::parse_frame_range(frames_option)) {
+            auto at = std::find(shot.begin(), shot.end(), frame);
+            if (at == shot.end())
+                throw usage_error(fmt::format("--frames {}: frame {} is not in the shot of {} ({})", frames_option,
+                                              frame, m_solve.name, io::describe_frames(shot)));
+            written[static_cast<size_t>(at - shot.begin())] = true;
+        }
+    }
+    for (size_t t = 0; t < paths.size(); ++t)
+        if (!written[t])
+            paths[t].clear();
+    return static_cast<int>(std::count(written.begin(), written.end(), true));
+}
+
+void StageRun::prepare(const io::FrameSequence& input, const io::SequenceReader& reader)
+{
+    m_fingerprint = {shot_json(input, reader), method_options_given(m_command)};
+    const int height = reader.height(), frames = static_cast<int>(input.frames.size());
+    const int blocks = (height + denoise::kStageBlockRows - 1) / denoise::kStageBlockRows;
+    switch (m_task.stage) {
+    case denoise::Stage::Statistics: {
+        int index = 0, count = 0, first = 0, last = 0;
+        std::smatch match;
+        if (parse_share(m_options.rows, "--rows", index, count)) {
+            if (count > blocks)
+                throw usage_error(fmt::format("--rows {}: the shot's {} rows make {} blocks of {}, fewer than {} "
+                                              "tasks",
+                                              m_options.rows, height, blocks, denoise::kStageBlockRows, count));
+            auto [begin, end] = share_of(blocks, index, count);
+            first = begin * denoise::kStageBlockRows;
+            last = std::min(height, end * denoise::kStageBlockRows) - 1;
+        } else if (std::regex_match(m_options.rows, match, std::regex(R"((\d+)-(\d+))"))) {
+            first = std::stoi(match[1]);
+            last = std::stoi(match[2]);
+        } else {
+            throw usage_error(fmt::format("--rows '{}': write Y0-Y1 or I/K", m_options.rows));
+        }
+        if (first > last || last >= height || first % denoise::kStageBlockRows != 0 ||
+            ((last + 1) % denoise::kStageBlockRows != 0 && last + 1 != height))
+            throw usage_error(fmt::format("--rows {}: a statistics task covers whole blocks of {} rows of the "
+                                          "shot's 0-{} (Y0 a multiple of {}, Y1 + 1 a multiple or {})",
+                                          m_options.rows, denoise::kStageBlockRows, height - 1,
+                                          denoise::kStageBlockRows, height));
+        m_task.row_begin = first;
+        m_task.row_end = last + 1;
+        break;
+    }
+    case denoise::Stage::Solve:
+        read_statistics(m_statistics, m_fingerprint, height, frames, m_task);
+        break;
+    case denoise::Stage::Write:
+        read_solve(m_solve, m_fingerprint, m_task);
+        break;
+    }
+}
+
+void StageRun::finish(const std::string& output_path) const
+{
+    if (writes_frames())
+        return;
+    std::string bytes = m_task.stage == denoise::Stage::Statistics ? statistics_bytes(m_fingerprint, m_task)
+                                                                   : solve_bytes(m_fingerprint, m_task);
+    if (m_options.output_bytes)
+        *m_options.output_bytes = std::move(bytes);
+    else
+        io::write_text_file(output_path, bytes);
+}
+
+nlohmann::ordered_json StageRun::json() const
+{
+    nlohmann::ordered_json json{{"stage", denoise::stage_name(m_task.stage)}};
+    if (m_task.stage == denoise::Stage::Statistics)
+        json["rows"] = {m_task.row_begin, m_task.row_end - 1};
+    if (m_task.stage == denoise::Stage::Solve)
+        for (const StageBytes& input : m_statistics)
+            json["statistics_files"].push_back(input.name);
+    if (m_task.stage == denoise::Stage::Write)
+        json["solve_file"] = m_solve.name;
+    return json;
+}
+
+}  // namespace modestack::app

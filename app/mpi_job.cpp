@@ -1,0 +1,128 @@
+#include "app/mpi_job.h"
+
+#include "core/common/error.h"
+
+#include <fmt/format.h>
+#include <mpi.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <new>
+
+namespace modestack::app {
+namespace {
+
+// MPI_Init for the lifetime of the job; MPI_Finalize after.
+class MpiSession {
+public:
+    MpiSession()
+    {
+        MPI_Init(nullptr, nullptr);
+        MPI_Comm_rank(MPI_COMM_WORLD, &m_rank);
+        MPI_Comm_size(MPI_COMM_WORLD, &m_size);
+    }
+    ~MpiSession() { MPI_Finalize(); }
+    MpiSession(const MpiSession&) = delete;
+    MpiSession& operator=(const MpiSession&) = delete;
+
+    int rank() const { return m_rank; }
+    int size() const { return m_size; }
+
+    /// At rank 0: every rank's `mine`, in rank order (empty elsewhere).
+    std::vector<StageBytes> gather(const std::string& mine) const
+    {
+        int length = static_cast<int>(mine.size());
+        std::vector<int> lengths(m_size), offsets(m_size);
+        MPI_Gather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
+        std::string all;
+        if (m_rank == 0) {
+            long long total = 0;
+            for (int r = 0; r < m_size; offsets[r] = static_cast<int>(total), total += lengths[r], ++r)
+                ;
+            if (total > 2'000'000'000)
+                throw bad_input("mpirun", "the ranks' statistics exceed 2 GB: use fewer ranks");
+            all.resize(static_cast<size_t>(total));
+        }
+        MPI_Gatherv(mine.data(), length, MPI_BYTE, all.data(), lengths.data(), offsets.data(), MPI_BYTE, 0,
+                    MPI_COMM_WORLD);
+        std::vector<StageBytes> gathered;
+        if (m_rank == 0)
+            for (int r = 0; r < m_size; ++r)
+                if (lengths[r] > 0)
+                    gathered.push_back({fmt::format("the statistics of rank {}", r), all.substr(offsets[r], lengths[r])});
+        return gathered;
+    }
+
+    /// Rank 0's `bytes` at every rank.
+    std::string broadcast(std::string bytes) const
+    {
+        int length = static_cast<int>(bytes.size());
+        MPI_Bcast(&length, 1, MPI_INT, 0, MPI_COMM_WORLD);
+        bytes.resize(static_cast<size_t>(length));
+        MPI_Bcast(bytes.data(), length, MPI_BYTE, 0, MPI_COMM_WORLD);
+        return bytes;
+    }
+
+    [[noreturn]] void abort(const std::string& message, int code) const
+    {
+        std::fprintf(stderr, "modestack: rank %d of %d: %s\n", m_rank, m_size, message.c_str());
+        std::fflush(stderr);
+        MPI_Abort(MPI_COMM_WORLD, code);
+        std::_Exit(code);  // MPI_Abort does not return; in case it does
+    }
+
+private:
+    int m_rank = 0;
+    int m_size = 1;
+};
+
+}  // namespace
+
+bool started_by_mpirun()
+{
+    for (const char* name : {"OMPI_COMM_WORLD_SIZE", "PMI_SIZE"})
+        if (const char* value = std::getenv(name); value && std::atoi(value) > 1)
+            return true;
+    return false;
+}
+
+int run_mpi_denoise(const std::string& frames, const RunStage& run_stage)
+{
+    MpiSession mpi;
+    const bool lead = mpi.rank() == 0;
+    const std::string share = fmt::format("{}/{}", mpi.rank() + 1, mpi.size());
+    try {
+        StageOptions stats;
+        stats.stage = "stats";
+        stats.rows = share;
+        std::string statistics;
+        stats.output_bytes = &statistics;
+        if (int code = run_stage(stats, frames, lead); code != 0)
+            mpi.abort("the statistics stage failed", code);
+        const std::vector<StageBytes> gathered = mpi.gather(statistics);
+
+        std::string solved;
+        if (lead) {
+            StageOptions solve;
+            solve.stage = "solve";
+            solve.stats_bytes = &gathered;
+            solve.output_bytes = &solved;
+            if (int code = run_stage(solve, frames, false); code != 0)
+                mpi.abort("the solve stage failed", code);
+        }
+        const StageBytes solve_file{"the solve of rank 0", mpi.broadcast(std::move(solved))};
+
+        StageOptions write;
+        write.stage = "write";
+        write.solve_bytes = &solve_file;
+        return run_stage(write, share, lead);
+    } catch (const Error& error) {
+        mpi.abort(error.what(), exit_code(error.kind()));
+    } catch (const std::bad_alloc&) {
+        mpi.abort("out of memory (try a smaller --max-memory)", exit_code(ErrorKind::BadInput));
+    } catch (const std::exception& error) {
+        mpi.abort(std::string("internal error: ") + error.what(), exit_code(ErrorKind::Internal));
+    }
+}
+
+}  // namespace modestack::app

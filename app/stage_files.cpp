@@ -1,0 +1,320 @@
+#include "app/stage_files.h"
+
+#include "core/common/error.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+namespace modestack::app {
+namespace {
+
+static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "stage files hold little-endian doubles");
+
+constexpr const char* kMagic = "modestack stage file 1";
+
+// The numbers of a file, appended in order.
+class Payload {
+public:
+    void add(double value) { m_bytes.append(reinterpret_cast<const char*>(&value), sizeof value); }
+    void add_lower(const Eigen::MatrixXd& matrix)
+    {
+        for (Eigen::Index j = 0; j < matrix.cols(); ++j)
+            for (Eigen::Index i = j; i < matrix.rows(); ++i)
+                add(matrix(i, j));
+    }
+    void add_gram(const lowrank::GramAccumulator& gram)
+    {
+        const lowrank::GramAccumulator::State state = gram.state();
+        add_lower(state.gram);
+        add_lower(state.half_gram[0]);
+        add_lower(state.half_gram[1]);
+        for (Eigen::Index i = 0; i < state.frame_sum.size(); ++i)
+            add(state.frame_sum[i]);
+    }
+    std::size_t doubles() const { return m_bytes.size() / sizeof(double); }
+    const std::string& bytes() const { return m_bytes; }
+
+private:
+    std::string m_bytes;
+};
+
+// Doubles per Gram accumulator of `frames` frames (see Payload::add_gram).
+std::size_t gram_doubles(int frames) { return 3 * static_cast<std::size_t>(frames) * (frames + 1) / 2 + frames; }
+
+// Reads the numbers of a file back, in the order they were added.
+class PayloadReader {
+public:
+    PayloadReader(const char* data, std::size_t doubles) : m_data(data), m_left(doubles) {}
+    double next()
+    {
+        if (m_left == 0)
+            throw internal_error("stage file payload read past its end");
+        double value;
+        std::memcpy(&value, m_data, sizeof value);
+        m_data += sizeof value;
+        --m_left;
+        return value;
+    }
+    Eigen::MatrixXd lower(int size)
+    {
+        Eigen::MatrixXd matrix(size, size);
+        for (int j = 0; j < size; ++j)
+            for (int i = j; i < size; ++i)
+                matrix(i, j) = matrix(j, i) = next();
+        return matrix;
+    }
+    lowrank::GramAccumulator gram(int frames, std::int64_t rows, std::int64_t tiles)
+    {
+        lowrank::GramAccumulator::State state;
+        state.gram = lower(frames);
+        state.half_gram[0] = lower(frames);
+        state.half_gram[1] = lower(frames);
+        state.frame_sum.resize(frames);
+        for (int i = 0; i < frames; ++i)
+            state.frame_sum[i] = next();
+        state.rows = rows;
+        state.tiles = tiles;
+        return lowrank::GramAccumulator::from_state(state);
+    }
+
+private:
+    const char* m_data;
+    std::size_t m_left;
+};
+
+std::string stage_bytes(nlohmann::ordered_json header, const Payload& payload)
+{
+    header["doubles"] = payload.doubles();
+    return std::string(kMagic) + "\n" + header.dump() + "\n" + payload.bytes();
+}
+
+nlohmann::ordered_json header_for(denoise::Stage stage, const ShotFingerprint& fingerprint, int frames)
+{
+    nlohmann::ordered_json header;
+    header["stage"] = denoise::stage_name(stage);
+    header["shot"] = fingerprint.shot;
+    header["options"] = fingerprint.options;
+    header["frames"] = frames;
+    return header;
+}
+
+nlohmann::ordered_json outliers_json(const lowrank::OutlierCounts& counts)
+{
+    return {{"non_finite", counts.non_finite}, {"fireflies", counts.fireflies}};
+}
+
+// A stage file read whole: its header and where its numbers start.
+struct StageFile {
+    std::string path;
+    std::string bytes;
+    nlohmann::json header;
+    std::size_t payload_offset = 0;
+
+    PayloadReader payload() const
+    {
+        return {bytes.data() + payload_offset, (bytes.size() - payload_offset) / sizeof(double)};
+    }
+};
+
+// The first key of `expected` whose value differs in `found` (or is missing).
+std::string first_difference(const nlohmann::json& expected, const nlohmann::json& found)
+{
+    for (auto it = expected.begin(); it != expected.end(); ++it)
+        if (!found.contains(it.key()) || found.at(it.key()) != it.value())
+            return it.key();
+    for (auto it = found.begin(); it != found.end(); ++it)
+        if (!expected.contains(it.key()))
+            return it.key();
+    return {};
+}
+
+std::string read_whole_file(const std::string& path)
+{
+    std::ifstream in(path, std::ios::binary);
+    if (!in)
+        throw bad_input(path, "cannot open the stage file");
+    return std::string(std::istreambuf_iterator<char>(in), {});
+}
+
+// Checks that `bytes` (named `path` in errors) are a `stage` file of this shot and options.
+StageFile parse_stage_file(const std::string& path, std::string bytes, denoise::Stage stage,
+                           const ShotFingerprint& fingerprint)
+{
+    StageFile file{path, std::move(bytes), {}, 0};
+    const std::size_t magic_end = file.bytes.find('\n');
+    if (magic_end == std::string::npos || file.bytes.compare(0, magic_end, kMagic) != 0)
+        throw bad_input(path, "not a modestack stage file");
+    const std::size_t header_end = file.bytes.find('\n', magic_end + 1);
+    if (header_end == std::string::npos)
+        throw bad_input(path, "damaged stage file: its header is cut off");
+    try {
+        file.header = nlohmann::json::parse(file.bytes.substr(magic_end + 1, header_end - magic_end - 1));
+        file.payload_offset = header_end + 1;
+        const std::string found = file.header.at("stage").get<std::string>();
+        if (found != denoise::stage_name(stage))
+            throw bad_input(path, fmt::format("is the output of --stage {}, not of --stage {}", found,
+                                              denoise::stage_name(stage)));
+        if (file.bytes.size() - file.payload_offset != file.header.at("doubles").get<std::size_t>() * sizeof(double))
+            throw bad_input(path, "damaged stage file: its size does not match its header (cut off?)");
+        const nlohmann::json shot = fingerprint.shot, options = fingerprint.options;
+        if (file.header.at("shot") != shot)
+            throw bad_input(path, fmt::format("belongs to another shot: its {} differ from this command's input",
+                                              first_difference(shot, file.header.at("shot"))));
+        if (file.header.at("options") != options)
+            throw bad_input(path, fmt::format("was made with other options: {} differs from this command's "
+                                              "(give every task of a job the same options)",
+                                              first_difference(options, file.header.at("options"))));
+    } catch (const nlohmann::json::exception& error) {
+        throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
+    }
+    return file;
+}
+
+}  // namespace
+
+std::string shot_frames_of_solve_file(const StageBytes& solve)
+{
+    const std::string& path = solve.name;
+    std::istringstream in(solve.bytes);
+    std::string magic, header;
+    if (!std::getline(in, magic) || magic != kMagic || !std::getline(in, header))
+        throw bad_input(path, "not a modestack stage file");
+    try {
+        const nlohmann::json json = nlohmann::json::parse(header);
+        if (json.at("stage").get<std::string>() != denoise::stage_name(denoise::Stage::Solve))
+            throw bad_input(path, fmt::format("is the output of --stage {}, not of --stage solve",
+                                              json.at("stage").get<std::string>()));
+        return json.at("shot").at("frames").get<std::string>();
+    } catch (const nlohmann::json::exception& error) {
+        throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
+    }
+}
+
+StageBytes read_stage_bytes(const std::string& path) { return {path, read_whole_file(path)}; }
+
+std::string statistics_bytes(const ShotFingerprint& fingerprint, const denoise::StageTask& task)
+{
+    const int frames = task.gram_blocks.empty() ? 0 : task.gram_blocks.front().frames();
+    nlohmann::ordered_json header = header_for(denoise::Stage::Statistics, fingerprint, frames);
+    header["rows"] = {task.row_begin, task.row_end};
+    header["block_rows"] = denoise::kStageBlockRows;
+    header["outliers"] = outliers_json(task.outliers);
+    nlohmann::ordered_json blocks = nlohmann::ordered_json::array();
+    Payload payload;
+    for (const lowrank::GramAccumulator& block : task.gram_blocks) {
+        const lowrank::GramAccumulator::State state = block.state();
+        blocks.push_back({{"rows", state.rows}, {"tiles", state.tiles}});
+        payload.add_gram(block);
+    }
+    header["blocks"] = blocks;
+    return stage_bytes(header, payload);
+}
+
+void read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprint& fingerprint, int height,
+                     int frames, denoise::StageTask& task)
+{
+    if (inputs.empty())
+        throw usage_error("--stage solve needs the statistics files of the job: --stats FILE...");
+    struct Band {
+        int begin, end;
+        std::size_t file;
+    };
+    std::vector<StageFile> files;
+    std::vector<Band> bands;
+    for (const StageBytes& input : inputs) {
+        const std::string& path = input.name;
+        files.push_back(parse_stage_file(path, input.bytes, denoise::Stage::Statistics, fingerprint));
+        const nlohmann::json& header = files.back().header;
+        try {
+            const int begin = header.at("rows").at(0).get<int>(), end = header.at("rows").at(1).get<int>();
+            const int blocks = (end - begin + denoise::kStageBlockRows - 1) / denoise::kStageBlockRows;
+            if (header.at("frames").get<int>() != frames || header.at("block_rows").get<int>() != denoise::kStageBlockRows ||
+                begin < 0 || end > height || begin >= end || static_cast<int>(header.at("blocks").size()) != blocks ||
+                header.at("doubles").get<std::size_t>() != blocks * gram_doubles(frames))
+                throw bad_input(path, "damaged statistics file: its sizes do not fit the shot");
+            bands.push_back({begin, end, files.size() - 1});
+        } catch (const nlohmann::json::exception& error) {
+            throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
+        }
+    }
+    std::sort(bands.begin(), bands.end(), [](const Band& a, const Band& b) { return a.begin < b.begin; });
+    int covered = 0;
+    for (const Band& band : bands) {
+        const std::string& path = files[band.file].path;
+        if (band.begin < covered) {
+            auto other = std::find_if(bands.begin(), bands.end(), [&](const Band& b) {
+                return &b != &band && b.begin < band.end && band.begin < b.end;
+            });
+            throw bad_input(path, fmt::format("rows {}-{} are also in {}: each band of rows must be given once",
+                                              band.begin, band.end - 1, files[other->file].path));
+        }
+        if (band.begin > covered)
+            throw bad_input(path, fmt::format("rows {}-{} are in no statistics file given", covered, band.begin - 1));
+        covered = band.end;
+    }
+    if (covered < height)
+        throw bad_input(files[bands.back().file].path,
+                        fmt::format("rows {}-{} are in no statistics file given", covered, height - 1));
+    task.gram_blocks.clear();
+    task.outliers = {};
+    for (const Band& band : bands) {
+        const StageFile& file = files[band.file];
+        PayloadReader payload = file.payload();
+        for (const nlohmann::json& block : file.header.at("blocks"))
+            task.gram_blocks.push_back(
+                payload.gram(frames, block.at("rows").get<std::int64_t>(), block.at("tiles").get<std::int64_t>()));
+        task.outliers.non_finite += file.header.at("outliers").at("non_finite").get<std::int64_t>();
+        task.outliers.fireflies += file.header.at("outliers").at("fireflies").get<std::int64_t>();
+    }
+}
+
+std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::StageTask& task)
+{
+    if (!task.gram)
+        throw internal_error("solve_bytes: the task has no merged sums");
+    const lowrank::GramAccumulator::State state = task.gram->state();
+    nlohmann::ordered_json header = header_for(denoise::Stage::Solve, fingerprint, task.gram->frames());
+    header["gram"] = {{"rows", state.rows}, {"tiles", state.tiles}};
+    header["outliers"] = outliers_json(task.outliers);
+    header["survey_rows"] = task.survey_rows.size();
+    header["survey_row_length"] = task.survey_rows.empty() ? 0 : task.survey_rows.front().size();
+    Payload payload;
+    payload.add_gram(*task.gram);
+    for (const std::vector<double>& row : task.survey_rows) {
+        if (row.size() != task.survey_rows.front().size())
+            throw internal_error("solve_bytes: survey rows of different lengths");
+        for (double value : row)
+            payload.add(value);
+    }
+    return stage_bytes(header, payload);
+}
+
+void read_solve(const StageBytes& solve, const ShotFingerprint& fingerprint, denoise::StageTask& task)
+{
+    const std::string& path = solve.name;
+    StageFile file = parse_stage_file(path, solve.bytes, denoise::Stage::Solve, fingerprint);
+    try {
+        const int frames = file.header.at("frames").get<int>();
+        const std::size_t rows = file.header.at("survey_rows").get<std::size_t>();
+        const std::size_t length = file.header.at("survey_row_length").get<std::size_t>();
+        if (frames < 1 || file.header.at("doubles").get<std::size_t>() != gram_doubles(frames) + rows * length)
+            throw bad_input(path, "damaged solve file: its sizes do not agree");
+        PayloadReader payload = file.payload();
+        task.gram = payload.gram(frames, file.header.at("gram").at("rows").get<std::int64_t>(),
+                                 file.header.at("gram").at("tiles").get<std::int64_t>());
+        task.outliers.non_finite = file.header.at("outliers").at("non_finite").get<std::int64_t>();
+        task.outliers.fireflies = file.header.at("outliers").at("fireflies").get<std::int64_t>();
+        task.survey_rows.assign(rows, std::vector<double>(length));
+        for (std::vector<double>& row : task.survey_rows)
+            for (double& value : row)
+                value = payload.next();
+    } catch (const nlohmann::json::exception& error) {
+        throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
+    }
+}
+
+}  // namespace modestack::app

@@ -1,0 +1,61 @@
+// The files a farm denoise passes between its tasks (`denoise --stage`, issue 11;
+// core/denoise/stage_task.h): a statistics task's block sums, and the solve
+// task's merged sums and mode-filter survey. Each file is one text line naming
+// the format, one line of JSON (the stage, the shot's fingerprint, sizes,
+// counts) and the numbers as raw little-endian doubles, so that every bit
+// survives the trip.
+//
+// The fingerprint says which shot and which method a file belongs to: the input
+// frames (numbers, file names without their directory, byte sizes), the shot's
+// shape and channels, and every option of the command line that shapes the
+// result. Tasks of one job must be given the same options; a file from another
+// shot, other options, a missing or a duplicated band is refused with a one-line
+// error naming it. The same bytes travel between MPI ranks (mpi_job.h).
+#pragma once
+
+#include "core/denoise/stage_task.h"
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+#include <vector>
+
+namespace modestack::app {
+
+/// What must agree between the files of one job.
+struct ShotFingerprint {
+    nlohmann::ordered_json shot;     ///< frames, files, sizes, shape, channels
+    nlohmann::ordered_json options;  ///< the method's options as given
+};
+
+/// A stage file's bytes and the name its errors give (its path, or the MPI
+/// rank that sent it).
+struct StageBytes {
+    std::string name;
+    std::string bytes;
+};
+
+/// Reads a stage file whole (errors name `path`).
+StageBytes read_stage_bytes(const std::string& path);
+
+/// The frames of the shot a solve file was made for (its fingerprint's
+/// "frames"): a write task denoises that shot and writes a part of it.
+std::string shot_frames_of_solve_file(const StageBytes& solve);
+
+/// A statistics task's output: rows [row_begin, row_end) of the shot.
+std::string statistics_bytes(const ShotFingerprint& fingerprint, const denoise::StageTask& task);
+
+/// Checks the statistics files of a job against each other and against
+/// `fingerprint`: every block of a shot of `height` rows exactly once. Fills
+/// task.gram_blocks (row order) and task.outliers (their sums).
+void read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprint& fingerprint, int height,
+                     int frames, denoise::StageTask& task);
+
+/// The solve task's output.
+std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::StageTask& task);
+
+/// Reads a solve file made for `fingerprint` into task.gram, task.outliers and
+/// task.survey_rows.
+void read_solve(const StageBytes& solve, const ShotFingerprint& fingerprint, denoise::StageTask& task);
+
+}  // namespace modestack::app

@@ -1,0 +1,176 @@
+// End-to-end: `modestack denoise --stage stats|solve|write` as a farm job runs
+// it, one command per task, on a generated multi-layer sequence: the outputs
+// hold the same pixels, in every channel, as one `denoise` run; partial files
+// that are missing, duplicated, from another shot or made with other options
+// are refused with one line and nothing written.
+#include "tests/tools/testkit.h"
+
+#include <doctest/doctest.h>
+#include <nlohmann/json.hpp>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+using namespace modestack;
+using testkit::run_modestack;
+using testkit::TempDir;
+
+namespace {
+// 150 rows: blocks of 64 rows 0-63, 64-127 and 128-149.
+constexpr int kWidth = 32, kHeight = 150, kFrames = 12;
+
+testkit::ExrLayout layout()
+{
+    testkit::ExrLayout result;
+    result.width = kWidth;
+    result.height = kHeight;
+    result.channel_names = {"ViewLayer.Combined.R", "ViewLayer.Combined.G", "ViewLayer.Combined.B",
+                            "ViewLayer.DiffInd.R",  "ViewLayer.DiffInd.G",  "ViewLayer.DiffInd.B"};
+    result.channel_types = {"half", "half", "half", "float", "float", "float"};
+    return result;
+}
+
+// DiffInd: a rank-2 signal with noise and a firefly; Combined: other data.
+float noisy_value(int frame, int x, int y, int c)
+{
+    if (c < 3)
+        return 0.01f * x + 0.02f * y + frame;
+    std::mt19937 generator(static_cast<unsigned>(((frame * 131 + x) * 977 + y) * 7 + c));
+    std::normal_distribution<float> normal(0.0f, 0.15f);
+    const float t = static_cast<float>(frame) / kFrames;
+    float value = 0.6f + 0.3f * std::sin(0.2f * x + c) * std::cos(0.05f * y) * (1 + t) + 0.3f * (x > 16) * t * t;
+    if (frame == 4 && x == 3 && y == 100)
+        value += 200.0f;
+    return value + normal(generator);
+}
+
+std::vector<int> frames(int first, int last)
+{
+    std::vector<int> result;
+    for (int f = first; f <= last; ++f)
+        result.push_back(f);
+    return result;
+}
+
+std::string slurp(const std::string& path)
+{
+    std::ifstream file(path);
+    std::stringstream text;
+    text << file.rdbuf();
+    return text.str();
+}
+
+void run_ok(const std::string& arguments)
+{
+    auto result = run_modestack(arguments);
+    REQUIRE_MESSAGE(result.exit_code == 0, arguments << "\n" << result.err);
+}
+
+// Every frame of `a` and `b` holds the same channels with the same bytes.
+void check_same_pixels(const std::string& a, const std::string& b)
+{
+    for (int frame = 1; frame <= kFrames; ++frame) {
+        char name[32];
+        std::snprintf(name, sizeof name, "/d.%04d.exr", frame);
+        CAPTURE(frame);
+        CHECK(testkit::read_channel_names(a + name) == testkit::read_channel_names(b + name));
+        CHECK(testkit::read_native(a + name) == testkit::read_native(b + name));
+    }
+}
+}  // namespace
+
+TEST_CASE("denoise --stage: stats, solve and write tasks give the pixels of one run")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), frames(1, kFrames), layout(), noisy_value);
+    const std::string in = "denoise " + dir.file("in.####.exr") + " --layer DiffInd -q ";
+    for (const std::string method : {"", "--no-mode-filter --rank 2 "}) {
+        CAPTURE(method);
+        TempDir job;
+        run_ok(in + method + "-o " + job.file("one/d.####.exr"));
+        // Two statistics tasks by share, one by rows; the solve task gets them in any order.
+        run_ok(in + method + "--stage stats --rows 1/2 -o " + job.file("s1.stats"));
+        run_ok(in + method + "--stage stats --rows 64-127 -o " + job.file("s2.stats"));
+        run_ok(in + method + "--stage stats --rows 128-149 -o " + job.file("s3.stats"));
+        run_ok(in + method + "--stage solve --stats " + job.file("s3.stats") + " " + job.file("s1.stats") + " " +
+               job.file("s2.stats") + " -o " + job.file("shot.solve") + " --json " + job.file("solve.json"));
+        run_ok(in + method + "--stage write --solve " + job.file("shot.solve") + " --frames 1/3 -o " +
+               job.file("farm/d.####.exr"));
+        run_ok(in + method + "--stage write --solve " + job.file("shot.solve") + " --frames 5-9 -o " +
+               job.file("farm/d.####.exr") + " --json " + job.file("write.json"));
+        CHECK(testkit::list_directory(job.file("farm")).size() == 9);
+        run_ok(in + method + "--stage write --solve " + job.file("shot.solve") + " --frames 10-12 -o " +
+               job.file("farm/d.####.exr"));
+        check_same_pixels(job.file("one"), job.file("farm"));
+        auto solve = nlohmann::json::parse(slurp(job.file("solve.json")));
+        CHECK(solve["farm"]["stage"] == "solve");
+        CHECK(solve["outliers"]["fireflies"].get<int>() > 0);
+        auto write = nlohmann::json::parse(slurp(job.file("write.json")));
+        CHECK(write["frames_written"] == 5);
+        CHECK(write["rank"]["n"] == solve["rank"]["n"]);
+    }
+}
+
+TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partials are refused")
+{
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), frames(1, kFrames), layout(), noisy_value);
+    testkit::write_sequence(dir.file("other.%04d.exr"), frames(1, kFrames), layout(),
+                            [](int frame, int x, int y, int c) { return noisy_value(frame, x, y, c) * 2 + 0.37f; });
+    const std::string in = "denoise " + dir.file("in.####.exr") + " --layer DiffInd -q ";
+    run_ok(in + "--stage stats --rows 1/2 -o " + dir.file("a1.stats"));
+    run_ok(in + "--stage stats --rows 2/2 -o " + dir.file("a2.stats"));
+    run_ok(in + "--stage stats --rows 1/3 -o " + dir.file("b1.stats"));
+    run_ok(in + "--rank 3 --stage stats --rows 2/2 -o " + dir.file("rank3.stats"));
+    run_ok("denoise " + dir.file("other.####.exr") + " --layer DiffInd -q --stage stats --rows 2/2 -o " +
+           dir.file("other.stats"));
+    run_ok("denoise " + dir.file("in.####.exr") + " --frames 1-11 --layer DiffInd -q --stage stats --rows 2/2 -o " +
+           dir.file("short.stats"));
+    std::ofstream(dir.file("junk.stats")) << "not a stage file\n";
+    const std::string solve = in + "--stage solve -o " + dir.file("out/shot.solve") + " --stats ";
+    struct Case {
+        std::string arguments;
+        int exit_code;
+        std::string message;
+    };
+    std::vector<Case> cases{
+        {solve + dir.file("a1.stats"), 1, "a1.stats: rows 64-149 are in no statistics file given"},
+        {solve + dir.file("a2.stats"), 1, "a2.stats: rows 0-63 are in no statistics file given"},
+        {solve + dir.file("a1.stats") + " " + dir.file("b1.stats") + " " + dir.file("a2.stats"), 1,
+         "are also in"},
+        {solve + dir.file("a1.stats") + " " + dir.file("other.stats"), 1, "other.stats: belongs to another shot"},
+        {solve + dir.file("a1.stats") + " " + dir.file("short.stats"), 1, "short.stats: belongs to another shot"},
+        {solve + dir.file("a1.stats") + " " + dir.file("rank3.stats"), 1,
+         "rank3.stats: was made with other options: --rank"},
+        {solve + dir.file("a1.stats") + " " + dir.file("junk.stats"), 1, "junk.stats: not a modestack stage file"},
+        {solve + dir.file("a1.stats") + " " + dir.file("missing.stats"), 1, "missing.stats: cannot open"},
+        {in + "--stage write --solve " + dir.file("a1.stats") + " -o " + dir.file("out/d.####.exr"), 1,
+         "a1.stats: is the output of --stage stats, not of --stage solve"},
+        {in + "--stage stats --rows 10-63 -o " + dir.file("out/x.stats"), 2, "whole blocks of 64 rows"},
+        {in + "--stage stats --rows 4/3 -o " + dir.file("out/x.stats"), 2, "--rows 4/3"},
+        {in + "--stage stats --rows 1/4 -o " + dir.file("out/x.stats"), 2, "fewer than 4 tasks"},
+        {in + "--stage stats -o " + dir.file("out/x.stats"), 2, "--stage stats needs --rows"},
+        {in + "--stage solve --rows 1/2 -o " + dir.file("out/x.solve"), 2, "--rows belongs to --stage stats"},
+        {in + "--stage stats --rows 1/2 --method rsvd -o " + dir.file("out/x.stats"), 2, "--method rsvd"},
+        {in + "--stage merge -o " + dir.file("out/x.stats"), 2, "--stage 'merge'"},
+        {in + "--stage stats --rows 1/2 --report r.html -o " + dir.file("out/x.stats"), 2,
+         "cannot be combined with --report"},
+    };
+    for (const Case& c : cases) {
+        CAPTURE(c.arguments);
+        auto result = run_modestack(c.arguments);
+        CHECK(result.exit_code == c.exit_code);
+        CHECK(result.err.find('\n') == result.err.size() - 1);
+        CHECK_MESSAGE(result.err.find(c.message) != std::string::npos, result.err);
+        if (std::ifstream(dir.file("out")).good())
+            CHECK(testkit::list_directory(dir.file("out")).empty());
+    }
+    // A write task's --frames must be frames of the solve file's shot.
+    run_ok(solve + dir.file("a1.stats") + " " + dir.file("a2.stats"));
+    auto outside = run_modestack(in + "--stage write --solve " + dir.file("out/shot.solve") + " --frames 10-14 -o " +
+                                 dir.file("w/d.####.exr"));
+    CHECK(outside.exit_code == 2);
+    CHECK_MESSAGE(outside.err.find("frame 13 is not in the shot") != std::string::npos, outside.err);
+}
