@@ -1,4 +1,4 @@
-// One farm task's share of a denoise (issue 11; DESIGN.md, "Beyond one machine"):
+// One farm task's share of a denoise (issue 11; README, "Farm jobs and MPI"):
 // the engine's run split at the points where everything it carries is small.
 //   Statistics: pass 1 over a range of rows → the Gram sums of each fixed block
 //               of kStageBlockRows rows in it, and the outlier counts;
