@@ -4,6 +4,7 @@
 #include "core/common/error.h"
 #include "core/scene/gltf_animation.h"
 #include "core/scene/gltf_loader.h"
+#include "core/scene/gltf_materials.h"
 #include "tests/tools/testkit.h"
 
 #include <doctest/doctest.h>
@@ -150,6 +151,28 @@ TEST_CASE("bad glTF files give one line naming the file and the problem")
     CHECK(load_error(dir.file("overrun.gltf")) ==
           dir.file("overrun.gltf") + ": accessor 0 (mesh 'tri' primitive 0 positions): needs 48 bytes but its buffer "
                                      "view 0 has 36");
+}
+
+TEST_CASE("a base colour texture becomes its average linear colour times the factor, reported once")
+{
+    testkit::TempDir dir;
+    write_triangle_bin(dir.file("tri.bin"));
+    // A 2×1 PNG: sRGB (1, 0, 1) and (0, 1, 1) → linear average (0.5, 0.5, 1).
+    std::string json = triangle_json(
+        "tri.bin",
+        R"(,"materials":[{"pbrMetallicRoughness":{"baseColorFactor":[0.5,0.8,0.9,1],"metallicFactor":0,)"
+        R"("baseColorTexture":{"index":0}}}],"textures":[{"source":0}],"images":[{"uri":"data:image/png;base64,)"
+        R"(iVBORw0KGgoAAAANSUhEUgAAAAIAAAABCAIAAAB7QOjdAAAADUlEQVR4nGP4zwCE/wEM+gP92V8GAgAAAABJRU5ErkJggg=="}])");
+    const std::string attributes = R"("attributes":{"POSITION":0})";
+    json.replace(json.find(attributes), attributes.size(), attributes + R"(,"material":0)");
+    write_text(dir.file("textured.gltf"), json);
+    GltfScene gltf = load_gltf(dir.file("textured.gltf"));
+    check_vec3(gltf.meshes.at(0).primitives.at(0).material.albedo, {0.25f, 0.4f, 0.9f});
+    CHECK(gltf.notices.messages() == std::vector<std::string>{
+                                         "base colour textures are replaced by their average colour (no texture "
+                                         "lookups)"});
+    unsigned char grey16[4] = {0xff, 0xff, 0, 0}; // 16-bit grey: white and black
+    check_vec3(average_srgb_colour(grey16, 2, 1, 1, 16), {0.5f, 0.5f, 0.5f});
 }
 
 TEST_CASE("unsupported features are reported once each, not silently ignored")
