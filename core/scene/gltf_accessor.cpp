@@ -28,14 +28,22 @@ struct AccessorContext {
 int components_of(int type)
 {
     switch (type) {
-    case TINYGLTF_TYPE_SCALAR: return 1;
-    case TINYGLTF_TYPE_VEC2: return 2;
-    case TINYGLTF_TYPE_VEC3: return 3;
-    case TINYGLTF_TYPE_VEC4: return 4;
-    case TINYGLTF_TYPE_MAT2: return 4;
-    case TINYGLTF_TYPE_MAT3: return 9;
-    case TINYGLTF_TYPE_MAT4: return 16;
-    default: return 0;
+    case TINYGLTF_TYPE_SCALAR:
+        return 1;
+    case TINYGLTF_TYPE_VEC2:
+        return 2;
+    case TINYGLTF_TYPE_VEC3:
+        return 3;
+    case TINYGLTF_TYPE_VEC4:
+        return 4;
+    case TINYGLTF_TYPE_MAT2:
+        return 4;
+    case TINYGLTF_TYPE_MAT3:
+        return 9;
+    case TINYGLTF_TYPE_MAT4:
+        return 16;
+    default:
+        return 0;
     }
 }
 
@@ -43,12 +51,16 @@ int component_size(int component_type)
 {
     switch (component_type) {
     case TINYGLTF_COMPONENT_TYPE_BYTE:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return 1;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return 1;
     case TINYGLTF_COMPONENT_TYPE_SHORT:
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT: return 2;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+        return 2;
     case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
-    case TINYGLTF_COMPONENT_TYPE_FLOAT: return 4;
-    default: return 0;
+    case TINYGLTF_COMPONENT_TYPE_FLOAT:
+        return 4;
+    default:
+        return 0;
     }
 }
 
@@ -65,7 +77,8 @@ double read_component(const unsigned char* p, int component_type, bool normalize
         auto v = static_cast<std::int8_t>(*p);
         return normalized ? std::max(v / 127.0, -1.0) : v;
     }
-    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE: return normalized ? *p / 255.0 : *p;
+    case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+        return normalized ? *p / 255.0 : *p;
     case TINYGLTF_COMPONENT_TYPE_SHORT: {
         std::int16_t v;
         std::memcpy(&v, p, 2);
@@ -86,8 +99,8 @@ double read_component(const unsigned char* p, int component_type, bool normalize
 
 // The bytes of `count` elements of `element_size` bytes, `stride` apart, starting
 // `offset` bytes into buffer view `view_index`; checked against the view and buffer.
-const unsigned char* view_data(const AccessorContext& context, int view_index, std::size_t offset, std::size_t count,
-                               std::size_t element_size, std::size_t stride)
+const unsigned char* view_data(const AccessorContext& context, int view_index, std::size_t offset,
+                               std::size_t count, std::size_t element_size, std::size_t stride)
 {
     const auto& model = context.model;
     if (view_index < 0 || static_cast<std::size_t>(view_index) >= model.bufferViews.size())
@@ -98,10 +111,12 @@ const unsigned char* view_data(const AccessorContext& context, int view_index, s
     const tinygltf::Buffer& buffer = model.buffers[view.buffer];
     std::size_t needed = count == 0 ? 0 : offset + (count - 1) * stride + element_size;
     if (needed > view.byteLength)
-        context.fail(fmt::format("needs {} bytes but its buffer view {} has {}", needed, view_index, view.byteLength));
+        context.fail(
+            fmt::format("needs {} bytes but its buffer view {} has {}", needed, view_index, view.byteLength));
     if (view.byteOffset + view.byteLength > buffer.data.size())
-        context.fail(fmt::format("buffer view {} ends at byte {} but buffer {} has {} bytes (truncated .bin?)",
-                                 view_index, view.byteOffset + view.byteLength, view.buffer, buffer.data.size()));
+        context.fail(
+            fmt::format("buffer view {} ends at byte {} but buffer {} has {} bytes (truncated .bin?)",
+                        view_index, view.byteOffset + view.byteLength, view.buffer, buffer.data.size()));
     return buffer.data.data() + view.byteOffset + offset;
 }
 
@@ -127,9 +142,10 @@ std::vector<double> read_accessor(const AccessorContext& context, int components
         if (stride == 0)
             stride = element_size;
         if (stride < element_size)
-            context.fail(fmt::format("byte stride {} is smaller than its {}-byte elements", stride, element_size));
-        const unsigned char* data =
-            view_data(context, accessor.bufferView, accessor.byteOffset, accessor.count, element_size, stride);
+            context.fail(
+                fmt::format("byte stride {} is smaller than its {}-byte elements", stride, element_size));
+        const unsigned char* data = view_data(context, accessor.bufferView, accessor.byteOffset,
+                                              accessor.count, element_size, stride);
         for (std::size_t e = 0; e < accessor.count; ++e)
             for (int c = 0; c < components; ++c)
                 values[e * components + c] =
@@ -144,11 +160,12 @@ std::vector<double> read_accessor(const AccessorContext& context, int components
         const unsigned char* indices =
             view_data(context, accessor.sparse.indices.bufferView, accessor.sparse.indices.byteOffset, count,
                       index_size, index_size);
-        const unsigned char* replacements = view_data(context, accessor.sparse.values.bufferView,
-                                                      accessor.sparse.values.byteOffset, count, element_size,
-                                                      element_size);
+        const unsigned char* replacements =
+            view_data(context, accessor.sparse.values.bufferView, accessor.sparse.values.byteOffset, count,
+                      element_size, element_size);
         for (std::size_t i = 0; i < count; ++i) {
-            auto target = static_cast<std::size_t>(read_component(indices + i * index_size, index_type, false));
+            auto target =
+                static_cast<std::size_t>(read_component(indices + i * index_size, index_type, false));
             if (target >= accessor.count)
                 context.fail(fmt::format("sparse index {} is past its {} elements", target, accessor.count));
             for (int c = 0; c < components; ++c)
@@ -178,8 +195,9 @@ std::vector<float> read_float_accessor(const tinygltf::Model& model, int index, 
     return result;
 }
 
-std::vector<std::uint32_t> read_index_accessor(const tinygltf::Model& model, int index, std::size_t vertex_count,
-                                               const std::string& file, const std::string& what)
+std::vector<std::uint32_t> read_index_accessor(const tinygltf::Model& model, int index,
+                                               std::size_t vertex_count, const std::string& file,
+                                               const std::string& what)
 {
     AccessorContext context{model, file, what, index};
     std::vector<double> values = read_accessor(context, 1);

@@ -22,7 +22,8 @@ std::vector<float> read_float_accessor(const tinygltf::Model& model, int index, 
 
 /// Index accessor `index` (unsigned byte, short or int scalars); every index must be
 /// below `vertex_count`. Throws a bad-input error naming `file` otherwise.
-std::vector<std::uint32_t> read_index_accessor(const tinygltf::Model& model, int index, std::size_t vertex_count,
-                                               const std::string& file, const std::string& what);
+std::vector<std::uint32_t> read_index_accessor(const tinygltf::Model& model, int index,
+                                               std::size_t vertex_count, const std::string& file,
+                                               const std::string& what);
 
 } // namespace modestack::scene

@@ -28,12 +28,24 @@ Bracket bracket(const std::vector<float>& times, float time, Interpolation inter
     return {before, after, span > 0 ? (time - times[before]) / span : 0.0f};
 }
 
-// The first of the `components` floats of key `key`'s value.
-const float* key_value(const KeyframeTrack& track, std::size_t key)
+// The values of the two keys around `time` and the fraction between them; `u` is 0
+// when only the first counts (one key, outside the keys, STEP, or exactly on a key).
+struct KeyPair {
+    const float* before;
+    const float* after;
+    float u;
+};
+
+KeyPair key_pair(const KeyframeTrack& track, float time)
 {
+    Bracket b = bracket(track.times, time, track.interpolation);
+    // CubicSpline stores (in-tangent, value, out-tangent) per key: take the value.
     std::size_t elements_per_key = track.interpolation == Interpolation::CubicSpline ? 3 : 1;
-    std::size_t element = key * elements_per_key + (elements_per_key == 3 ? 1 : 0);
-    return &track.values[element * track.components];
+    std::size_t skip = elements_per_key == 3 ? 1 : 0;
+    auto value = [&](std::size_t key) {
+        return &track.values[(key * elements_per_key + skip) * track.components];
+    };
+    return {value(b.before), value(b.after), b.before == b.after ? 0.0f : b.u};
 }
 
 } // namespace
@@ -42,26 +54,22 @@ Vec3 sample_vec3(const KeyframeTrack& track, float time_seconds)
 {
     if (track.times.empty())
         return {};
-    Bracket b = bracket(track.times, time_seconds, track.interpolation);
-    const float* p = key_value(track, b.before);
-    const float* q = key_value(track, b.after);
-    if (b.before == b.after || b.u == 0)
+    KeyPair k = key_pair(track, time_seconds);
+    const float *p = k.before, *q = k.after;
+    if (k.u == 0)
         return {p[0], p[1], p[2]};
-    float u = b.u;
-    return {p[0] + (q[0] - p[0]) * u, p[1] + (q[1] - p[1]) * u, p[2] + (q[2] - p[2]) * u};
+    return {p[0] + (q[0] - p[0]) * k.u, p[1] + (q[1] - p[1]) * k.u, p[2] + (q[2] - p[2]) * k.u};
 }
 
 Quat sample_rotation(const KeyframeTrack& track, float time_seconds)
 {
     if (track.times.empty())
         return {};
-    Bracket b = bracket(track.times, time_seconds, track.interpolation);
-    const float* p = key_value(track, b.before);
-    const float* q = key_value(track, b.after);
-    Quat a{p[0], p[1], p[2], p[3]};
-    if (b.before == b.after || b.u == 0)
+    KeyPair k = key_pair(track, time_seconds);
+    Quat a{k.before[0], k.before[1], k.before[2], k.before[3]};
+    if (k.u == 0)
         return normalize(a);
-    return slerp(a, Quat{q[0], q[1], q[2], q[3]}, b.u);
+    return slerp(a, Quat{k.after[0], k.after[1], k.after[2], k.after[3]}, k.u);
 }
 
 } // namespace modestack::scene

@@ -17,8 +17,8 @@ enum class Interpolation { Linear, Step, CubicSpline };
 /// The keys of one animated property.
 struct KeyframeTrack {
     Interpolation interpolation = Interpolation::Linear;
-    std::vector<float> times;  ///< seconds, increasing
-    int components = 3;        ///< 3 (translation, scale) or 4 (rotation quaternion x, y, z, w)
+    std::vector<float> times; ///< seconds, increasing
+    int components = 3;       ///< 3 (translation, scale) or 4 (rotation quaternion x, y, z, w)
     /// `components` floats per key; for CubicSpline three elements per key
     /// (in-tangent, value, out-tangent), as glTF stores them.
     std::vector<float> values;

@@ -9,7 +9,7 @@ namespace {
 
 constexpr float kPi = 3.14159265358979323846f;
 constexpr float kLumensPerWatt = 683.0f;
-constexpr int kSphereRings = 8;    // latitude bands of the point-light sphere
+constexpr int kSphereRings = 8;     // latitude bands of the point-light sphere
 constexpr int kSphereSegments = 16; // longitude segments
 
 // Two unit vectors t, b with cross(t, b) = n (n unit).
@@ -26,15 +26,17 @@ void add_square(Mesh& mesh, Vec3 center, Vec3 facing, float side)
     Vec3 t, b;
     basis(facing, t, b);
     float h = 0.5f * side;
-    add_quad(mesh, center - t * h - b * h, center + t * h - b * h, center + t * h + b * h, center - t * h + b * h);
+    add_quad(mesh, center - t * h - b * h, center + t * h - b * h, center + t * h + b * h,
+             center - t * h + b * h);
 }
 
 void add_sphere(Mesh& mesh, Vec3 center, float radius)
 {
     auto point = [&](int ring, int segment) {
         float theta = kPi * ring / kSphereRings, phi = 2 * kPi * segment / kSphereSegments;
-        return center + Vec3{std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)} *
-                            radius;
+        return center +
+               Vec3{std::sin(theta) * std::cos(phi), std::cos(theta), std::sin(theta) * std::sin(phi)} *
+                   radius;
     };
     for (int ring = 0; ring < kSphereRings; ++ring)
         for (int segment = 0; segment < kSphereSegments; ++segment) {

@@ -76,9 +76,11 @@ tinygltf::Model read_model(const std::string& path)
         std::size_t json_error = reason.find("[json.exception.");
         if (json_error != std::string::npos) {
             std::size_t end = reason.find("] ", json_error);
-            throw bad_input(path, "not valid JSON: " + (end == std::string::npos ? reason : reason.substr(end + 2)));
+            throw bad_input(path, "not valid JSON: " +
+                                      (end == std::string::npos ? reason : reason.substr(end + 2)));
         }
-        throw bad_input(path, "cannot load the glTF " + std::string(binary ? "binary" : "file") + ": " + reason);
+        throw bad_input(path,
+                        "cannot load the glTF " + std::string(binary ? "binary" : "file") + ": " + reason);
     }
     return model;
 }
@@ -86,13 +88,15 @@ tinygltf::Model read_model(const std::string& path)
 void check_extensions(const tinygltf::Model& model, const std::string& path, GltfNotices& notices)
 {
     auto supported = [](const std::string& name) {
-        return std::find(kSupportedExtensions.begin(), kSupportedExtensions.end(), name) != kSupportedExtensions.end();
+        return std::find(kSupportedExtensions.begin(), kSupportedExtensions.end(), name) !=
+               kSupportedExtensions.end();
     };
     for (const std::string& name : model.extensionsRequired)
         if (!supported(name))
-            throw bad_input(path, fmt::format("requires the glTF extension {}, which modestack does not support "
-                                              "(supported: KHR_lights_punctual, KHR_materials_emissive_strength)",
-                                              name));
+            throw bad_input(path,
+                            fmt::format("requires the glTF extension {}, which modestack does not support "
+                                        "(supported: KHR_lights_punctual, KHR_materials_emissive_strength)",
+                                        name));
     for (const std::string& name : model.extensionsUsed)
         if (!supported(name))
             notices.add(fmt::format("extension {} is not supported and is ignored", name));
@@ -102,7 +106,8 @@ void check_extensions(const tinygltf::Model& model, const std::string& path, Glt
 void check_index(int index, std::size_t size, const std::string& path, const std::string& what)
 {
     if (index < 0 || static_cast<std::size_t>(index) >= size)
-        throw bad_input(path, fmt::format("{} refers to index {}, which does not exist ({} defined)", what, index, size));
+        throw bad_input(
+            path, fmt::format("{} refers to index {}, which does not exist ({} defined)", what, index, size));
 }
 
 std::string node_label(const tinygltf::Model& model, int node)
@@ -153,8 +158,9 @@ void load_nodes(const tinygltf::Model& model, const std::string& path, GltfScene
         for (int child : source.children) {
             check_index(child, model.nodes.size(), path, label + " child");
             if (gltf.nodes[child].parent >= 0 || child == static_cast<int>(i))
-                throw bad_input(path, fmt::format("{} has more than one parent (the node hierarchy must be a tree)",
-                                                  node_label(model, child)));
+                throw bad_input(path,
+                                fmt::format("{} has more than one parent (the node hierarchy must be a tree)",
+                                            node_label(model, child)));
             gltf.nodes[child].parent = static_cast<int>(i);
             node.children.push_back(child);
         }
@@ -183,7 +189,8 @@ void load_nodes(const tinygltf::Model& model, const std::string& path, GltfScene
         gltf.roots.push_back(root);
     }
     if (model.scenes.size() > 1)
-        gltf.notices.add(fmt::format("the file has {} scenes: only scene {} is rendered", model.scenes.size(), scene));
+        gltf.notices.add(
+            fmt::format("the file has {} scenes: only scene {} is rendered", model.scenes.size(), scene));
     const tinygltf::Value& extras = model.scenes[scene].extras;
     if (extras.IsObject() && extras.Has("fps") && extras.Get("fps").IsNumber())
         gltf.file_fps = extras.Get("fps").GetNumberAsDouble();
@@ -192,13 +199,20 @@ void load_nodes(const tinygltf::Model& model, const std::string& path, GltfScene
 const char* mode_name(int mode)
 {
     switch (mode) {
-    case TINYGLTF_MODE_POINTS: return "points";
-    case TINYGLTF_MODE_LINE: return "lines";
-    case TINYGLTF_MODE_LINE_LOOP: return "line loops";
-    case TINYGLTF_MODE_LINE_STRIP: return "line strips";
-    case TINYGLTF_MODE_TRIANGLE_STRIP: return "triangle strips";
-    case TINYGLTF_MODE_TRIANGLE_FAN: return "triangle fans";
-    default: return "unknown modes";
+    case TINYGLTF_MODE_POINTS:
+        return "points";
+    case TINYGLTF_MODE_LINE:
+        return "lines";
+    case TINYGLTF_MODE_LINE_LOOP:
+        return "line loops";
+    case TINYGLTF_MODE_LINE_STRIP:
+        return "line strips";
+    case TINYGLTF_MODE_TRIANGLE_STRIP:
+        return "triangle strips";
+    case TINYGLTF_MODE_TRIANGLE_FAN:
+        return "triangle fans";
+    default:
+        return "unknown modes";
     }
 }
 
@@ -221,7 +235,8 @@ void load_meshes(const tinygltf::Model& model, const std::string& path, GltfScen
             auto position = primitive.attributes.find("POSITION");
             if (position == primitive.attributes.end())
                 throw bad_input(path, what + " has no POSITION attribute");
-            std::vector<float> xyz = read_float_accessor(model, position->second, 3, path, what + " positions");
+            std::vector<float> xyz =
+                read_float_accessor(model, position->second, 3, path, what + " positions");
             GltfPrimitive out;
             for (std::size_t v = 0; v + 2 < xyz.size(); v += 3)
                 out.positions.push_back({xyz[v], xyz[v + 1], xyz[v + 2]});
@@ -270,7 +285,8 @@ void load_cameras_and_lights(const tinygltf::Model& model, const std::string& pa
         stack.insert(stack.end(), children.rbegin(), children.rend());
     }
     if (gltf.camera_node < 0)
-        throw bad_input(path, "the scene has no perspective camera (modestack renders through the first one)");
+        throw bad_input(path,
+                        "the scene has no perspective camera (modestack renders through the first one)");
     int camera_nodes = 0;
     for (const GltfNode& node : gltf.nodes)
         camera_nodes += node.camera >= 0;
@@ -300,11 +316,13 @@ void load_cameras_and_lights(const tinygltf::Model& model, const std::string& pa
             continue;
         const GltfLight& light = gltf.lights[node.light];
         if (light.type == GltfLightType::Point)
-            gltf.notices.add("point lights are rendered as emitting spheres of radius 5 cm with the same intensity "
-                             "(candela / 683 → W/sr)");
+            gltf.notices.add(
+                "point lights are rendered as emitting spheres of radius 5 cm with the same intensity "
+                "(candela / 683 → W/sr)");
         else if (light.type == GltfLightType::Spot)
-            gltf.notices.add("spot lights are rendered as 5 cm emitting squares facing the spot's direction: same "
-                             "on-axis intensity, a cosine lobe instead of the cone angles");
+            gltf.notices.add(
+                "spot lights are rendered as 5 cm emitting squares facing the spot's direction: same "
+                "on-axis intensity, a cosine lobe instead of the cone angles");
         else
             gltf.notices.add("directional lights are rendered as a large emitting square outside the scene's "
                              "bounds (about the light's illuminance at the centre; closed rooms block it)");
@@ -316,7 +334,8 @@ void load_cameras_and_lights(const tinygltf::Model& model, const std::string& pa
 void load_animations(const tinygltf::Model& model, const std::string& path, GltfScene& gltf)
 {
     if (model.animations.size() > 1)
-        gltf.notices.add(fmt::format("the file has {} animations: they are played together", model.animations.size()));
+        gltf.notices.add(
+            fmt::format("the file has {} animations: they are played together", model.animations.size()));
     for (std::size_t a = 0; a < model.animations.size(); ++a) {
         const tinygltf::Animation& animation = model.animations[a];
         for (std::size_t c = 0; c < animation.channels.size(); ++c) {
@@ -330,7 +349,8 @@ void load_animations(const tinygltf::Model& model, const std::string& path, Gltf
             else if (source.target_path == "scale")
                 channel.property = AnimatedProperty::Scale;
             else {
-                gltf.notices.add(fmt::format("animation of '{}' is not supported and is ignored", source.target_path));
+                gltf.notices.add(
+                    fmt::format("animation of '{}' is not supported and is ignored", source.target_path));
                 continue;
             }
             if (source.target_node < 0) // allowed by glTF for extensions; nothing to animate here
@@ -348,22 +368,26 @@ void load_animations(const tinygltf::Model& model, const std::string& path, Gltf
                 gltf.notices.add("CUBICSPLINE animation is approximated as LINEAR between its keys (tangents "
                                  "ignored)");
             } else
-                throw bad_input(path, fmt::format("{} has unknown interpolation '{}'", what, sampler.interpolation));
+                throw bad_input(
+                    path, fmt::format("{} has unknown interpolation '{}'", what, sampler.interpolation));
             track.components = channel.property == AnimatedProperty::Rotation ? 4 : 3;
             track.times = read_float_accessor(model, sampler.input, 1, path, what + " key times");
-            track.values = read_float_accessor(model, sampler.output, track.components, path, what + " key values");
-            std::size_t per_key = (track.interpolation == Interpolation::CubicSpline ? 3 : 1) * track.components;
+            track.values =
+                read_float_accessor(model, sampler.output, track.components, path, what + " key values");
+            std::size_t per_key =
+                (track.interpolation == Interpolation::CubicSpline ? 3 : 1) * track.components;
             if (track.times.empty() || track.values.size() != track.times.size() * per_key)
-                throw bad_input(path, fmt::format("{} has {} key times but {} values", what, track.times.size(),
-                                                  track.values.size() / track.components));
+                throw bad_input(path,
+                                fmt::format("{} has {} key times but {} values", what, track.times.size(),
+                                            track.values.size() / track.components));
             for (std::size_t k = 1; k < track.times.size(); ++k)
                 if (!(track.times[k] > track.times[k - 1]))
                     throw bad_input(path, fmt::format("{} key times are not increasing", what));
             if (track.times.front() < 0)
                 throw bad_input(path, fmt::format("{} starts at a negative time", what));
             if (gltf.nodes[source.target_node].has_matrix)
-                throw bad_input(path, fmt::format("{} animates {}, which has a matrix (glTF forbids it)", what,
-                                                  node_label(model, source.target_node)));
+                throw bad_input(path, fmt::format("{} animates {}, which has a matrix (glTF forbids it)",
+                                                  what, node_label(model, source.target_node)));
             channel.node = source.target_node;
             gltf.end_time_seconds = std::max(gltf.end_time_seconds, track.times.back());
             gltf.channels.push_back(std::move(channel));
@@ -377,7 +401,8 @@ bool is_gltf_path(const std::string& name)
 {
     std::string low = lower(name);
     auto ends_with = [&](const std::string& suffix) {
-        return low.size() > suffix.size() && low.compare(low.size() - suffix.size(), suffix.size(), suffix) == 0;
+        return low.size() > suffix.size() &&
+               low.compare(low.size() - suffix.size(), suffix.size(), suffix) == 0;
     };
     return ends_with(".gltf") || ends_with(".glb");
 }

@@ -66,7 +66,8 @@ Vec3 average_srgb_colour(const unsigned char* pixels, int width, int height, int
             }
             sum[c] += srgb_to_linear(v);
         }
-    return {static_cast<float>(sum[0] / count), static_cast<float>(sum[1] / count), static_cast<float>(sum[2] / count)};
+    return {static_cast<float>(sum[0] / count), static_cast<float>(sum[1] / count),
+            static_cast<float>(sum[2] / count)};
 }
 
 Material gltf_material(const tinygltf::Model& model, int index, GltfNotices& notices)
@@ -82,15 +83,16 @@ Material gltf_material(const tinygltf::Model& model, int index, GltfNotices& not
     if (pbr.baseColorTexture.index >= 0)
         albedo = albedo * texture_average(model, pbr.baseColorTexture.index, "base colour", notices);
     if (albedo.x > kMaxAlbedo || albedo.y > kMaxAlbedo || albedo.z > kMaxAlbedo)
-        notices.add(fmt::format("base colours above {} are clamped to {} (the tracer needs albedo < 1)", kMaxAlbedo,
-                                kMaxAlbedo));
+        notices.add(fmt::format("base colours above {} are clamped to {} (the tracer needs albedo < 1)",
+                                kMaxAlbedo, kMaxAlbedo));
     material.albedo = {std::clamp(albedo.x, 0.0f, kMaxAlbedo), std::clamp(albedo.y, 0.0f, kMaxAlbedo),
                        std::clamp(albedo.z, 0.0f, kMaxAlbedo)};
 
     Vec3 emission = factor3(source.emissiveFactor, {0, 0, 0});
     auto strength = source.extensions.find("KHR_materials_emissive_strength");
     if (strength != source.extensions.end() && strength->second.Has("emissiveStrength"))
-        emission = emission * static_cast<float>(strength->second.Get("emissiveStrength").GetNumberAsDouble());
+        emission =
+            emission * static_cast<float>(strength->second.Get("emissiveStrength").GetNumberAsDouble());
     if (source.emissiveTexture.index >= 0 && max_component(emission) > 0)
         emission = emission * texture_average(model, source.emissiveTexture.index, "emissive", notices);
     material.emission = {std::max(emission.x, 0.0f), std::max(emission.y, 0.0f), std::max(emission.z, 0.0f)};
@@ -99,8 +101,9 @@ Material gltf_material(const tinygltf::Model& model, int index, GltfNotices& not
 
     if (pbr.metallicFactor > 0 || pbr.metallicRoughnessTexture.index >= 0 || pbr.roughnessFactor < 1 ||
         source.normalTexture.index >= 0 || source.occlusionTexture.index >= 0)
-        notices.add("materials are rendered as diffuse (Lambertian): metallic, roughness, normal and occlusion "
-                    "maps are ignored");
+        notices.add(
+            "materials are rendered as diffuse (Lambertian): metallic, roughness, normal and occlusion "
+            "maps are ignored");
     if (source.alphaMode != "OPAQUE" || (pbr.baseColorFactor.size() == 4 && pbr.baseColorFactor[3] < 1))
         notices.add("transparency (alphaMode BLEND/MASK, base colour alpha) is ignored: surfaces are opaque");
     return material;

@@ -13,8 +13,9 @@ void GltfNotices::add(const std::string& message)
 
 bool GltfNotices::contains(const std::string& fragment) const
 {
-    return std::any_of(m_messages.begin(), m_messages.end(),
-                       [&](const std::string& message) { return message.find(fragment) != std::string::npos; });
+    return std::any_of(m_messages.begin(), m_messages.end(), [&](const std::string& message) {
+        return message.find(fragment) != std::string::npos;
+    });
 }
 
 } // namespace modestack::scene

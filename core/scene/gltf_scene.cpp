@@ -88,7 +88,8 @@ Scene gltf_scene_at(const GltfScene& gltf, float time_seconds)
     }
     for (int node : nodes)
         if (gltf.nodes[node].light >= 0)
-            scene.meshes.push_back(gltf_light_mesh(gltf.lights[gltf.nodes[node].light], world[node], center, radius));
+            scene.meshes.push_back(
+                gltf_light_mesh(gltf.lights[gltf.nodes[node].light], world[node], center, radius));
 
     if (gltf.camera_node >= 0) {
         const Mat4& camera = world[gltf.camera_node];

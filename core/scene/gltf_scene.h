@@ -19,16 +19,16 @@ namespace modestack::scene {
 /// One node of the hierarchy with its rest transform.
 struct GltfNode {
     std::string name;
-    int parent = -1;            ///< index into GltfScene::nodes, −1 for a root
+    int parent = -1; ///< index into GltfScene::nodes, −1 for a root
     std::vector<int> children;
     Vec3 translation{0, 0, 0};
     Quat rotation;
     Vec3 scale{1, 1, 1};
-    bool has_matrix = false;    ///< the node gives `matrix` instead of T, R, S (not animatable)
+    bool has_matrix = false; ///< the node gives `matrix` instead of T, R, S (not animatable)
     Mat4 matrix;
-    int mesh = -1;              ///< index into GltfScene::meshes
-    int camera = -1;            ///< index into GltfScene::cameras
-    int light = -1;             ///< index into GltfScene::lights
+    int mesh = -1;   ///< index into GltfScene::meshes
+    int camera = -1; ///< index into GltfScene::cameras
+    int light = -1;  ///< index into GltfScene::lights
 };
 
 /// Which node property an animation channel drives.
@@ -70,17 +70,17 @@ struct GltfLight {
 
 /// The whole file.
 struct GltfScene {
-    std::string file;             ///< for messages and provenance
+    std::string file; ///< for messages and provenance
     std::vector<GltfNode> nodes;
-    std::vector<int> roots;       ///< the root nodes of the scene rendered
+    std::vector<int> roots; ///< the root nodes of the scene rendered
     std::vector<GltfMesh> meshes;
     std::vector<GltfCamera> cameras;
     std::vector<GltfLight> lights;
     std::vector<GltfChannel> channels; ///< of every animation, played together
-    int camera_node = -1;         ///< the first camera node of the scene (depth first)
-    float end_time_seconds = 0;   ///< last key time of every channel (0 if static)
-    double file_fps = 0;          ///< frames per second the file asks for (scene extras "fps"), 0 if none
-    GltfNotices notices;          ///< approximations and unsupported features, one line each
+    int camera_node = -1;              ///< the first camera node of the scene (depth first)
+    float end_time_seconds = 0;        ///< last key time of every channel (0 if static)
+    double file_fps = 0; ///< frames per second the file asks for (scene extras "fps"), 0 if none
+    GltfNotices notices; ///< approximations and unsupported features, one line each
 };
 
 /// Frames per second: `requested` when positive, else the file's, else 24.

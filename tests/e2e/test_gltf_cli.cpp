@@ -28,8 +28,8 @@ TEST_CASE("render --scene room.gltf writes lit frames with every layer, determin
     CHECK(first.err.find("modestack: warning: " + kRoom + ": ") != std::string::npos);
     CHECK(testkit::list_directory(dir.path()) == std::vector<std::string>{"a.0001.exr", "a.0002.exr"});
     std::vector<std::string> names = testkit::read_channel_names(dir.file("a.0001.exr"));
-    for (const char* channel : {"Combined.R", "Combined.A", "DiffDir.G", "DiffInd.B", "DiffCol.R", "Emit.R", "Normal.X",
-                                "Depth.Z", "Position.Y", "DiffIndVar.R", "Rendered.V"})
+    for (const char* channel : {"Combined.R", "Combined.A", "DiffDir.G", "DiffInd.B", "DiffCol.R", "Emit.R",
+                                "Normal.X", "Depth.Z", "Position.Y", "DiffIndVar.R", "Rendered.V"})
         CHECK_MESSAGE(std::find(names.begin(), names.end(), channel) != names.end(), channel);
     CHECK(testkit::read_string_attribute(dir.file("a.0002.exr"), "modestack:scene") == kRoom);
     for (const char* frame : {"a.0001.exr", "a.0002.exr"}) {
@@ -50,7 +50,7 @@ TEST_CASE("render --scene room.gltf writes lit frames with every layer, determin
               testkit::read_native(dir.file(std::string("b.") + frame + ".exr")));
 }
 
-TEST_CASE("render --scene FILE.gltf: --fps sets the frame range; bad files and options give one line")
+TEST_CASE("render --scene FILE.gltf: --fps sets the frame range, bad files and options give one line")
 {
     TempDir dir;
     auto out = " -o " + dir.file("r.####.exr");

@@ -88,7 +88,8 @@ TEST_CASE("rotation keys are interpolated by slerp along the shorter arc")
     track.values = {0, 0, 0, 1, -quarter.x, -quarter.y, -quarter.z, -quarter.w};
     Quat half_way = sample_rotation(track, 0.5f);
     float sign = half_way.w < 0 ? -1.0f : 1.0f;
-    check_quat({sign * half_way.x, sign * half_way.y, sign * half_way.z, sign * half_way.w}, about_y(kPi / 4));
+    check_quat({sign * half_way.x, sign * half_way.y, sign * half_way.z, sign * half_way.w},
+               about_y(kPi / 4));
     // A turn of 270° between keys is slerped the short way (−90°).
     Quat three_quarters = about_y(3 * kPi / 2);
     track.values = {0, 0, 0, 1, three_quarters.x, three_quarters.y, three_quarters.z, three_quarters.w};
@@ -126,7 +127,7 @@ TEST_CASE("a node hierarchy composes animated parent and child transforms at the
     check_vec3(transform_point(gltf_world_matrices(gltf, 5.0f)[2], {0, 0, 0}), {5, 2, 0});
 }
 
-TEST_CASE("a matrix node uses its matrix; TRS is T·R·S")
+TEST_CASE("a matrix node uses its matrix, and TRS is T·R·S")
 {
     GltfScene gltf;
     gltf.nodes.resize(1);
@@ -136,7 +137,7 @@ TEST_CASE("a matrix node uses its matrix; TRS is T·R·S")
     CHECK(linear_determinant(gltf_local_matrix(gltf, 0, 0)) == doctest::Approx(-1));
 }
 
-TEST_CASE("frame f is at time (f - 1) / fps; the last frame covers the last key")
+TEST_CASE("frame f is at time (f - 1) / fps, and the last frame covers the last key")
 {
     CHECK(gltf_frame_time(1, 24) == 0.0f);
     CHECK(gltf_frame_time(25, 24) == doctest::Approx(1.0));

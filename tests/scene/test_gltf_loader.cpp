@@ -48,13 +48,15 @@ std::string triangle_json(const std::string& bin, const std::string& extra = "",
     std::string camera_node = with_camera ? R"(,{"camera":0,"translation":[0,0,3]})" : "";
     std::string scene_nodes = with_camera ? "[0,1]" : "[0]";
     return R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":)" + scene_nodes + R"(}],
-  "nodes":[{"mesh":0})" + camera_node + R"(],
+  "nodes":[{"mesh":0})" +
+           camera_node + R"(],
   "cameras":[{"type":"perspective","perspective":{"yfov":0.8,"znear":0.1}}],
   "meshes":[{"name":"tri","primitives":[{"attributes":{"POSITION":0}}]}],
   "accessors":[{"bufferView":0,"componentType":5126,"count":)" +
            std::to_string(count) + R"(,"type":"VEC3"}],
   "bufferViews":[{"buffer":0,"byteLength":36}],
-  "buffers":[{"uri":")" + bin + R"(","byteLength":36}])" + extra + "}";
+  "buffers":[{"uri":")" +
+           bin + R"(","byteLength":36}])" + extra + "}";
 }
 
 void write_triangle_bin(const std::string& path)
@@ -104,8 +106,10 @@ TEST_CASE("the test room's camera and mover are where Blender keyed them, at the
     int camera = gltf.camera_node, mover = node_named(gltf, "mover"), rider = node_named(gltf, "rider");
     // Keys (Blender frames 0 and 23 = our frames 1 and 24; Blender z-up → glTF y-up):
     // camera from (-0.7, 1.3, 1.3) to (0.7, 1.3, 1.3); mover x -0.8, 0 (our frame 12), 0.8.
-    check_vec3(transform_point(gltf_world_matrices(gltf, gltf_frame_time(1, 24))[camera], {}), {-0.7f, 1.3f, 1.3f});
-    check_vec3(transform_point(gltf_world_matrices(gltf, gltf_frame_time(24, 24))[camera], {}), {0.7f, 1.3f, 1.3f});
+    check_vec3(transform_point(gltf_world_matrices(gltf, gltf_frame_time(1, 24))[camera], {}),
+               {-0.7f, 1.3f, 1.3f});
+    check_vec3(transform_point(gltf_world_matrices(gltf, gltf_frame_time(24, 24))[camera], {}),
+               {0.7f, 1.3f, 1.3f});
     Vec3 middle = transform_point(gltf_world_matrices(gltf, 11.5f / 24)[camera], {});
     CHECK(middle.x == doctest::Approx(0).epsilon(1e-5).scale(1));
     std::vector<Mat4> frame_12 = gltf_world_matrices(gltf, gltf_frame_time(12, 24));
@@ -136,21 +140,25 @@ TEST_CASE("bad glTF files give one line naming the file and the problem")
               ": cannot find 'missing.bin', a buffer or image the file refers to (looked next to the file)");
     write_text(dir.file("bad.gltf"), "{ \"asset\": { \"version\": \"2.0\" ");
     CHECK(load_error(dir.file("bad.gltf")) ==
-          dir.file("bad.gltf") + ": not valid JSON: parse error at line 1, column 31: syntax error while parsing "
-                                 "object - unexpected end of input; expected '}'");
+          dir.file("bad.gltf") +
+              ": not valid JSON: parse error at line 1, column 31: syntax error while parsing "
+              "object - unexpected end of input; expected '}'");
     write_text(dir.file("draco.gltf"),
                triangle_json("tri.bin", R"(,"extensionsUsed":["KHR_draco_mesh_compression"],)"
                                         R"("extensionsRequired":["KHR_draco_mesh_compression"])"));
     CHECK(load_error(dir.file("draco.gltf")) ==
-          dir.file("draco.gltf") + ": requires the glTF extension KHR_draco_mesh_compression, which modestack "
-                                   "does not support (supported: KHR_lights_punctual, KHR_materials_emissive_strength)");
+          dir.file("draco.gltf") +
+              ": requires the glTF extension KHR_draco_mesh_compression, which modestack "
+              "does not support (supported: KHR_lights_punctual, KHR_materials_emissive_strength)");
     write_text(dir.file("nocamera.gltf"), triangle_json("tri.bin", "", 3, false));
     CHECK(load_error(dir.file("nocamera.gltf")) ==
-          dir.file("nocamera.gltf") + ": the scene has no perspective camera (modestack renders through the first one)");
+          dir.file("nocamera.gltf") +
+              ": the scene has no perspective camera (modestack renders through the first one)");
     write_text(dir.file("overrun.gltf"), triangle_json("tri.bin", "", 4));
     CHECK(load_error(dir.file("overrun.gltf")) ==
-          dir.file("overrun.gltf") + ": accessor 0 (mesh 'tri' primitive 0 positions): needs 48 bytes but its buffer "
-                                     "view 0 has 36");
+          dir.file("overrun.gltf") +
+              ": accessor 0 (mesh 'tri' primitive 0 positions): needs 48 bytes but its buffer "
+              "view 0 has 36");
 }
 
 TEST_CASE("a base colour texture becomes its average linear colour times the factor, reported once")
@@ -168,9 +176,9 @@ TEST_CASE("a base colour texture becomes its average linear colour times the fac
     write_text(dir.file("textured.gltf"), json);
     GltfScene gltf = load_gltf(dir.file("textured.gltf"));
     check_vec3(gltf.meshes.at(0).primitives.at(0).material.albedo, {0.25f, 0.4f, 0.9f});
-    CHECK(gltf.notices.messages() == std::vector<std::string>{
-                                         "base colour textures are replaced by their average colour (no texture "
-                                         "lookups)"});
+    CHECK(gltf.notices.messages() ==
+          std::vector<std::string>{"base colour textures are replaced by their average colour (no texture "
+                                   "lookups)"});
     unsigned char grey16[4] = {0xff, 0xff, 0, 0}; // 16-bit grey: white and black
     check_vec3(average_srgb_colour(grey16, 2, 1, 1, 16), {0.5f, 0.5f, 0.5f});
 }

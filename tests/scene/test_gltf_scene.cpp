@@ -87,7 +87,7 @@ TEST_CASE("the camera follows its animated node: position, view direction (-z), 
     check_vec3(end.camera.look_at - end.camera.position, {-1, 0, 0});
 }
 
-TEST_CASE("meshes go to world space with their material; a mirroring scale keeps the front side")
+TEST_CASE("meshes go to world space with their material, and a mirroring scale keeps the front side")
 {
     GltfScene gltf = camera_and_triangle();
     Scene scene = gltf_scene_at(gltf, 0);
@@ -114,7 +114,8 @@ TEST_CASE("a point light is a 5 cm sphere, facing out, of intensity candela / 68
         Vec3 n = front_normal(mesh, t);
         area += 0.5 * length(n);
         Vec3 middle = (mesh.positions[mesh.indices[3 * t]] + mesh.positions[mesh.indices[3 * t + 1]] +
-                       mesh.positions[mesh.indices[3 * t + 2]]) * (1.0f / 3);
+                       mesh.positions[mesh.indices[3 * t + 2]]) *
+                      (1.0f / 3);
         if (length(n) > 0)
             CHECK(dot(n, middle - Vec3{1, 2, 3}) > 0);
     }
