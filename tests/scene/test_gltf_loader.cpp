@@ -183,6 +183,26 @@ TEST_CASE("a base colour texture becomes its average linear colour times the fac
     check_vec3(average_srgb_colour(grey16, 2, 1, 1, 16), {0.5f, 0.5f, 0.5f});
 }
 
+TEST_CASE("a .glb (binary glTF with its buffer inside) loads like the .gltf, a truncated one is refused")
+{
+    testkit::TempDir dir;
+    std::string json = triangle_json("unused.bin");
+    json.replace(json.find(R"("uri":"unused.bin",)"), std::string(R"("uri":"unused.bin",)").size(), "");
+    json.append((4 - json.size() % 4) % 4, ' ');
+    const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    auto u32 = [](std::uint32_t v) { return std::string(reinterpret_cast<const char*>(&v), 4); };
+    std::string glb = "glTF" + u32(2) + u32(static_cast<std::uint32_t>(12 + 8 + json.size() + 8 + 36)) +
+                      u32(static_cast<std::uint32_t>(json.size())) + "JSON" + json + u32(36) +
+                      std::string("BIN\0", 4) + std::string(reinterpret_cast<const char*>(positions), 36);
+    write_text(dir.file("tri.glb"), glb);
+    GltfScene gltf = load_gltf(dir.file("tri.glb"));
+    REQUIRE(gltf.meshes.size() == 1);
+    check_vec3(gltf.meshes[0].primitives.at(0).positions.at(1), {1, 0, 0});
+    write_text(dir.file("short.glb"), glb.substr(0, 8));
+    CHECK(load_error(dir.file("short.glb")) ==
+          dir.file("short.glb") + ": cannot load the glTF binary: Too short data size for glTF Binary.");
+}
+
 TEST_CASE("unsupported features are reported once each, not silently ignored")
 {
     testkit::TempDir dir;
