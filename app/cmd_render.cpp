@@ -1,10 +1,11 @@
-// `modestack render --scene NAME -o SEQ`: the companion path tracer. Renders the
-// frames of a built-in animated scene at any spp (with a fresh seed per frame,
+// `modestack render --scene NAME|FILE.gltf -o SEQ`: the companion path tracer.
+// Renders the frames of a built-in animated scene or of a glTF 2.0 file at any spp (with a fresh seed per frame,
 // or --fixed-seed), optionally only the pixels of a mask sequence, and writes
 // one multi-layer EXR per frame with Cycles-style AOV names and provenance.
 #include "app/command.h"
 #include "app/option_values.h"
 #include "app/run_context.h"
+#include "app/scene_source.h"
 #include "core/common/error.h"
 #include "core/render/render.h"
 #include "core/scene/builtin_scenes.h"
@@ -35,6 +36,7 @@ struct RenderCommandOptions {
     std::string size = "320x240";
     std::string mask;
     std::string json_path;
+    double fps = 0; ///< glTF scenes: 0 = the file's or 24
     bool skip_existing = false;
     render::RenderOptions render;
     CommonOptions common;
@@ -48,7 +50,7 @@ const char* channel_type_for(const std::string& layer)
 }
 
 void write_frame(const std::string& path, const render::FrameAovs& aovs, const RenderCommandOptions& options,
-                 int frame)
+                 const SceneSource& source, int frame)
 {
     io::NewImageDescription image;
     image.width = options.render.width;
@@ -81,6 +83,8 @@ void write_frame(const std::string& path, const render::FrameAovs& aovs, const R
         io::HeaderAttribute::of_real("modestack:render_seconds", aovs.stats.seconds),
         io::HeaderAttribute::of_text("modestack:mask", options.mask),
     };
+    if (source.is_gltf())
+        attributes.push_back(io::HeaderAttribute::of_real("modestack:fps", source.fps()));
     io::FrameOutput output(path, image, attributes);
     output.write_float_rows(0, image.height, interleaved.data());
     output.commit();
@@ -102,19 +106,14 @@ int run_render(RenderCommandOptions& options)
         throw usage_error("render needs -o SEQ (e.g. -o noisy/shot.####.exr)");
     parse_image_size(options.size, options.render.width, options.render.height);
     render::validate_render_options(options.render);
-    const scene::SceneInfo* info = nullptr;
-    for (const auto& candidate : scene::builtin_scenes())
-        if (candidate.name == options.scene)
-            info = &candidate;
-    if (!info)
-        scene::make_builtin_scene(options.scene, 1);  // throws the error that lists the scenes
+    SceneSource source(options.scene, options.fps);
     std::vector<int> frames = options.frames.empty()
-                                  ? io::parse_frame_range(fmt::format("{}-{}", info->first_frame, info->last_frame))
+                                  ? io::parse_frame_range(fmt::format("{}-{}", source.first_frame(), source.last_frame()))
                                   : io::parse_frame_range(options.frames);
     for (int frame : frames)
-        if (frame < info->first_frame || frame > info->last_frame)
+        if (frame < source.first_frame() || frame > source.last_frame())
             throw usage_error(fmt::format("--frames: scene '{}' has frames {}-{}, not {}", options.scene,
-                                          info->first_frame, info->last_frame, frame));
+                                          source.first_frame(), source.last_frame(), frame));
     io::FrameSequence output = io::output_sequence(options.output, frames);
     std::vector<std::string> mask_files;
     if (!options.mask.empty()) {
@@ -125,6 +124,8 @@ int run_render(RenderCommandOptions& options)
     io::check_outputs(output.files, mask_files);
 
     RunContext context(options.common);
+    for (const std::string& notice : source.notices())
+        context.progress().warn(options.scene + ": " + notice);
     // Outputs are renamed into place only when complete, so an existing frame is a
     // finished one: a re-queued farm job renders only what is missing.
     std::vector<size_t> to_render;
@@ -151,10 +152,10 @@ int run_render(RenderCommandOptions& options)
         std::vector<std::uint8_t> mask;
         if (!mask_files.empty())
             mask = io::read_mask(mask_files[i], options.render.width, options.render.height);
-        scene::Scene scene = scene::make_builtin_scene(options.scene, frames[i]);
+        scene::Scene scene = source.at(frames[i]);
         render::render_frame(scene, frames[i], options.render, mask.empty() ? nullptr : mask.data(), aovs,
                              context.progress());
-        write_frame(output.files[i], aovs, options, frames[i]);
+        write_frame(output.files[i], aovs, options, source, frames[i]);
         paths += aovs.stats.paths;
         rays += aovs.stats.rays;
         seconds += aovs.stats.seconds;
@@ -171,6 +172,8 @@ int run_render(RenderCommandOptions& options)
         json["version"] = version_string();
         json["command"] = command_line();
         json["scene"] = options.scene;
+        if (source.is_gltf())
+            json["fps"] = source.fps();
         json["output"] = output.printf_pattern;
         json["frames"] = io::describe_frames(frames);
         json["skipped_existing_frames"] = skipped.empty() ? std::string() : io::describe_frames(skipped);
@@ -197,10 +200,18 @@ Subcommand add_render_command(CLI::App& parent)
 {
     auto options = std::make_shared<RenderCommandOptions>();
     CLI::App* command = parent.add_subcommand(
-        "render", "Render a built-in animated scene with the path tracer (one multi-layer EXR per frame)");
-    command->add_option("--scene", options->scene, "Built-in scene: static, orbit, switch, spin (list: print them)");
+        "render",
+        "Render a built-in animated scene or a glTF 2.0 file with the path tracer (one multi-layer EXR per frame)");
+    command->add_option("--scene", options->scene,
+                        "Built-in scene: static, orbit, switch, spin (list: print them), or a glTF 2.0 file "
+                        "FILE.gltf|FILE.glb (meshes, animation, first camera, KHR_lights_punctual; what is "
+                        "approximated is reported on stderr)");
     command->add_option("-o,--output", options->output, "Output frame sequence, e.g. noisy/shot.####.exr");
     command->add_option("--frames", options->frames, "Frames to render (default: all of the scene's frames)");
+    command->add_option("--fps", options->fps,
+                        "glTF scenes: frames per second; frame f is at animation time (f-1)/fps (default: the "
+                        "file's scene extras 'fps', else 24)")
+        ->check(CLI::PositiveNumber);
     command->add_option("--spp", options->render.spp, "Samples per pixel")->check(kAtLeastOne);
     command->add_option("--size", options->size, "Image size WIDTHxHEIGHT");
     command->add_option("--seed", options->render.seed, "Seed of the sample hash");
