@@ -279,7 +279,7 @@ int run_denoise(const DenoiseOptions& options)
         throw usage_error(fmt::format("--rank {}: the number of modes must be at least 1", settings.rank.fixed_rank));
     apply_training_frames(options.method_options, input.frames, settings);
     SegmentRun segments = plan_segments(options.method_options, input.frames, !options.save_modes.empty());
-    const bool output_in_memory = staged && !staged->writes_frames() && !staged->writes_file();  // an MPI rank
+    const bool output_in_memory = staged && staged->output_in_memory();  // an MPI rank
     if (!output_in_memory)
         io::check_outputs(writes_frames ? output.files : std::vector<std::string>{options.output}, input.files);
     if (!options.report_path.empty())

@@ -118,7 +118,7 @@ std::string StageRun::shot_frames(const std::string& frames_option) const
     return writes_frames() ? shot_frames_of_solve_file(m_solve) : frames_option;
 }
 
-int StageRun::keep_written_frames(const std::string& frames_option, const std::vector<int>& shot,
+void StageRun::keep_written_frames(const std::string& frames_option, const std::vector<int>& shot,
                                   std::vector<std::string>& paths) const
 {
     std::vector<bool> written(shot.size(), frames_option.empty());
@@ -138,14 +138,13 @@ int StageRun::keep_written_frames(const std::string& frames_option, const std::v
     for (size_t t = 0; t < paths.size(); ++t)
         if (!written[t])
             paths[t].clear();
-    return static_cast<int>(std::count(written.begin(), written.end(), true));
 }
 
 void StageRun::prepare(const io::FrameSequence& input, const io::SequenceReader& reader)
 {
     m_fingerprint = {shot_json(input, reader), method_options_given(m_command)};
     const int height = reader.height(), frames = static_cast<int>(input.frames.size());
-    const int blocks = (height + denoise::kStageBlockRows - 1) / denoise::kStageBlockRows;
+    const int blocks = denoise::stage_blocks(height);
     switch (m_task.stage) {
     case denoise::Stage::Statistics: {
         int index = 0, count = 0, first = 0, last = 0;
@@ -164,12 +163,8 @@ void StageRun::prepare(const io::FrameSequence& input, const io::SequenceReader&
         } else {
             throw usage_error(fmt::format("--rows '{}': write Y0-Y1 or I/K", m_options.rows));
         }
-        if (first > last || last >= height || first % denoise::kStageBlockRows != 0 ||
-            ((last + 1) % denoise::kStageBlockRows != 0 && last + 1 != height))
-            throw usage_error(fmt::format("--rows {}: a statistics task covers whole blocks of {} rows of the "
-                                          "shot's 0-{} (Y0 a multiple of {}, Y1 + 1 a multiple or {})",
-                                          m_options.rows, denoise::kStageBlockRows, height - 1,
-                                          denoise::kStageBlockRows, height));
+        // Checked here too, before any input is read (the engine checks again).
+        denoise::check_statistics_rows(first, last + 1, height);
         m_task.row_begin = first;
         m_task.row_end = last + 1;
         break;

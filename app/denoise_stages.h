@@ -46,14 +46,14 @@ public:
     /// whose shot is the solve file's and whose --frames picks the frames it writes.
     std::string shot_frames(const std::string& frames_option) const;
     /// Write task: clears the output paths of the frames it does not write
-    /// (--frames RANGE or I/K of `shot`); returns how many it writes.
-    int keep_written_frames(const std::string& frames_option, const std::vector<int>& shot,
+    /// (--frames RANGE or I/K of `shot`).
+    void keep_written_frames(const std::string& frames_option, const std::vector<int>& shot,
                             std::vector<std::string>& paths) const;
     /// Fingerprints the shot and reads the task's input files.
     void prepare(const io::FrameSequence& input, const io::SequenceReader& reader);
     denoise::StageTask& task() { return m_task; }
-    /// Stats and solve: the output goes to a file (atomically) or to output_bytes.
-    bool writes_file() const { return !writes_frames() && !m_options.output_bytes; }
+    /// Stats and solve of an MPI rank: the output goes to output_bytes, not to -o.
+    bool output_in_memory() const { return m_options.output_bytes != nullptr; }
     void finish(const std::string& output_path) const;
     /// What the task did, for the JSON summary.
     nlohmann::ordered_json json() const;

@@ -37,8 +37,10 @@ public:
         std::string all;
         if (m_rank == 0) {
             long long total = 0;
-            for (int r = 0; r < m_size; offsets[r] = static_cast<int>(total), total += lengths[r], ++r)
-                ;
+            for (int r = 0; r < m_size; ++r) {
+                offsets[r] = static_cast<int>(total);
+                total += lengths[r];
+            }
             if (total > 2'000'000'000)
                 throw bad_input("mpirun", "the ranks' statistics exceed 2 GB: use fewer ranks");
             all.resize(static_cast<size_t>(total));

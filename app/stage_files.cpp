@@ -231,7 +231,7 @@ void read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprin
         const nlohmann::json& header = files.back().header;
         try {
             const int begin = header.at("rows").at(0).get<int>(), end = header.at("rows").at(1).get<int>();
-            const int blocks = (end - begin + denoise::kStageBlockRows - 1) / denoise::kStageBlockRows;
+            const int blocks = denoise::stage_blocks(end - begin);
             if (header.at("frames").get<int>() != frames || header.at("block_rows").get<int>() != denoise::kStageBlockRows ||
                 begin < 0 || end > height || begin >= end || static_cast<int>(header.at("blocks").size()) != blocks ||
                 header.at("doubles").get<std::size_t>() != blocks * gram_doubles(frames))

@@ -121,15 +121,9 @@ private:
             throw usage_error(fmt::format("--stage {}: the farm stages use the gram solver, not --method rsvd", name));
         if (!m_settings.training_frames.empty())
             throw usage_error(fmt::format("--stage {} cannot be combined with --train-frames", name));
-        if (task.stage == Stage::Statistics &&
-            (task.row_begin < 0 || task.row_begin >= task.row_end || task.row_end > m_shape.height ||
-             task.row_begin % kStageBlockRows != 0 || (task.row_end % kStageBlockRows != 0 && task.row_end != m_shape.height)))
-            throw usage_error(fmt::format("--rows {}-{}: a statistics task covers whole blocks of {} rows of the {} "
-                                          "(first row a multiple of {}, last one before a multiple or the last row)",
-                                          task.row_begin, task.row_end - 1, kStageBlockRows, m_shape.height,
-                                          kStageBlockRows));
-        const int blocks = (m_shape.height + kStageBlockRows - 1) / kStageBlockRows;
-        if (task.stage == Stage::Solve && static_cast<int>(task.gram_blocks.size()) != blocks)
+        if (task.stage == Stage::Statistics)
+            check_statistics_rows(task.row_begin, task.row_end, m_shape.height);
+        if (task.stage == Stage::Solve && static_cast<int>(task.gram_blocks.size()) != stage_blocks(m_shape.height))
             throw internal_error("the solve stage needs every block's sums");
         if (task.stage == Stage::Write && !task.gram)
             throw internal_error("the write stage needs the merged sums");

@@ -29,6 +29,13 @@ enum class Stage { Statistics, Solve, Write };
 /// "stats", "solve", "write".
 const char* stage_name(Stage stage);
 
+/// Blocks of kStageBlockRows rows in `rows` image rows (the last one may be short).
+inline int stage_blocks(int rows) { return (rows + kStageBlockRows - 1) / kStageBlockRows; }
+
+/// Throws a usage error unless rows [row_begin, row_end) of a shot of `height`
+/// rows are whole blocks: what a statistics task may cover.
+void check_statistics_rows(int row_begin, int row_end, int height);
+
 struct StageTask {
     Stage stage = Stage::Statistics;
     /// Statistics: rows [row_begin, row_end) (row_begin a multiple of kStageBlockRows).

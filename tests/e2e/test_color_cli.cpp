@@ -17,6 +17,7 @@
 
 using namespace modestack;
 using testkit::run_modestack;
+using testkit::read_text;
 using testkit::TempDir;
 
 namespace {
@@ -58,14 +59,6 @@ testkit::ExrLayout float_rgb()
     layout.height = kHeight;
     layout.channel_types = {"float", "float", "float"};
     return layout;
-}
-
-std::string slurp(const std::string& path)
-{
-    std::ifstream file(path);
-    std::stringstream text;
-    text << file.rdbuf();
-    return text.str();
 }
 
 // Mean square difference of a sequence's RGB from the encoded truth.
@@ -139,7 +132,7 @@ TEST_CASE("an sRGB-encoded sequence is denoised in scene-linear and returned in 
     CHECK(std::fabs(output_mean - encoded_mean) < 0.01 * encoded_mean);
     CHECK(std::fabs(linear_mean - encoded_mean) > 0.1 * encoded_mean);
 
-    auto json = nlohmann::json::parse(slurp(dir.file("color.json")));
+    auto json = nlohmann::json::parse(read_text(dir.file("color.json")));
     CHECK(json["color"]["input_space"] == "sRGB Encoded Rec.709 (sRGB)");
     CHECK(json["color"]["input_space_from"] == "--colorspace");
     CHECK(json["color"]["converted"] == true);
@@ -168,7 +161,7 @@ TEST_CASE("a scene-linear EXR is not converted, and --ocio-config wins over $OCI
                                 " -o " + dir.file("b.####.exr") + " --json " + dir.file("b.json") + " -q");
     unsetenv("OCIO");
     REQUIRE_MESSAGE(result.exit_code == 0, result.err);
-    auto json = nlohmann::json::parse(slurp(dir.file("b.json")));
+    auto json = nlohmann::json::parse(read_text(dir.file("b.json")));
     CHECK(json["color"]["ocio_config_from"] == "--ocio-config");
     CHECK(json["color"]["input_space_from"] == "OpenEXR default");
     CHECK(json["color"]["converted"] == false);

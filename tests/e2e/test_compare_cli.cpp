@@ -15,6 +15,7 @@
 
 using namespace modestack;
 using testkit::run_modestack;
+using testkit::read_text;
 using testkit::TempDir;
 
 namespace {
@@ -38,14 +39,6 @@ testkit::ExrLayout float_rgb(int width = kWidth, int height = kHeight)
 std::vector<int> frames()
 {
     return {1, 2, 3, 4};
-}
-
-std::string slurp(const std::string& path)
-{
-    std::ifstream file(path);
-    std::stringstream text;
-    text << file.rdbuf();
-    return text.str();
 }
 
 bool one_line(const std::string& text)
@@ -99,7 +92,7 @@ TEST_CASE("compare: identical sequences have zero error, PASS and exit 0")
     auto result = run_modestack("compare " + pair + " --json " + dir.file("c.json"));
     REQUIRE_MESSAGE(result.exit_code == 0, result.err);
     CHECK(result.out.find("\nPASS\n") != std::string::npos);
-    auto json = nlohmann::json::parse(slurp(dir.file("c.json")));
+    auto json = nlohmann::json::parse(read_text(dir.file("c.json")));
     CHECK(json["verdict"] == "PASS");
     CHECK(json["exit_code"] == 0);
     CHECK(json["shot"]["relative_mse"] == 0.0);
@@ -124,7 +117,7 @@ TEST_CASE("compare: a known perturbation gives the expected relMSE, PSNR and fli
     Expected want = expected(test, reference_value);
     auto result = run_modestack("compare " + write_pair(dir, test) + " --json " + dir.file("c.json"));
     CHECK(result.exit_code == 2);
-    auto json = nlohmann::json::parse(slurp(dir.file("c.json")));
+    auto json = nlohmann::json::parse(read_text(dir.file("c.json")));
     double relative = json["shot"]["relative_mse"], psnr = json["shot"]["psnr_db"],
            flicker = json["shot"]["flicker"];
     MESSAGE("relMSE " << relative << " (expected " << want.relative_mse << "), PSNR " << psnr << " ("
@@ -153,7 +146,7 @@ TEST_CASE("compare: flicker is zero for a constant offset over time and positive
         auto result = run_modestack("compare " + dir.file(name + ".####.exr") + " " +
                                     dir.file("ref.####.exr") + " -q --json " + dir.file(name + ".json"));
         CHECK(result.exit_code == 2);
-        return nlohmann::json::parse(slurp(dir.file(name + ".json")));
+        return nlohmann::json::parse(read_text(dir.file(name + ".json")));
     };
     auto constant = run("offset"), noisy = run("alternating");
     // The same per-value error size, so a per-frame metric cannot tell them apart...
@@ -284,7 +277,7 @@ TEST_CASE(
     CHECK_MESSAGE(result.exit_code == 1, result.err); // 1/32 is under --fail 0.05, over --warn 1e-6
     CHECK(result.out.find("ViewLayer.DiffInd.R,ViewLayer.DiffInd.G,ViewLayer.DiffInd.B") !=
           std::string::npos);
-    auto json = nlohmann::json::parse(slurp(dir.file("c.json")));
+    auto json = nlohmann::json::parse(read_text(dir.file("c.json")));
     CHECK(json["test_channels"].size() == 3);
     CHECK(json["shot"]["max_absolute_error"] == 1.0 / 32.0);
     CHECK(json["shot"]["percent_warning"] == 50.0);

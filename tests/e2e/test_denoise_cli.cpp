@@ -14,6 +14,7 @@
 
 using namespace modestack;
 using testkit::run_modestack;
+using testkit::read_text;
 using testkit::TempDir;
 
 namespace {
@@ -86,13 +87,6 @@ std::vector<int> all_frames()
     return frames;
 }
 
-std::string slurp(const std::string& path)
-{
-    std::ifstream file(path);
-    std::stringstream text;
-    text << file.rdbuf();
-    return text.str();
-}
 }  // namespace
 
 // Root mean square of the rebuilt layer's error against the clean signal, and of its sigma.
@@ -131,7 +125,7 @@ TEST_CASE("denoise removes most of the noise, writes sigma, keeps other channels
     // Rank 2 alone keeps about 2/F of the white noise; filtering the modes removes more.
     CHECK(denoised < noisy / 10);
 
-    auto json = nlohmann::json::parse(slurp(dir.file("summary.json")));
+    auto json = nlohmann::json::parse(read_text(dir.file("summary.json")));
     CHECK(json["rank"]["rule"] == "sure");
     CHECK(json["rank"]["n"] >= 2);
     CHECK(json["mode_filter"].size() > 0);
@@ -163,7 +157,7 @@ TEST_CASE("denoise --no-mode-filter: press picks the true rank 2 and sigma match
                                 " --layer DiffInd --no-mode-filter --json " + dir.file("summary.json") + " -q");
     REQUIRE_MESSAGE(result.exit_code == 0, result.err);
     CHECK(mse_against_clean(dir.file("out/den.%04d.exr"), kFrames) < mse_against_clean(dir.file("in.%04d.exr"), kFrames) / 5);
-    auto json = nlohmann::json::parse(slurp(dir.file("summary.json")));
+    auto json = nlohmann::json::parse(read_text(dir.file("summary.json")));
     CHECK(json["rank"]["n"] == 2);
     CHECK(json["rank"]["rule"] == "press");
     // Noise 0.15 per frame, rank 2 of 24 frames: the rebuilt value's error is about 0.15*sqrt(2/24) = 0.043.
@@ -194,13 +188,13 @@ TEST_CASE("denoise output pixels are identical for --threads 1 and 2 and for str
     REQUIRE(run_modestack("denoise " + input + "--no-mode-filter -o " + dir.file("c/d.####.exr") + " --json " +
                           dir.file("c.json"))
                 .exit_code == 0);
-    const auto held = nlohmann::json::parse(slurp(dir.file("c.json")))["memory_held_bytes"].get<std::int64_t>();
+    const auto held = nlohmann::json::parse(read_text(dir.file("c.json")))["memory_held_bytes"].get<std::int64_t>();
     CHECK(held > 0);
     auto streamed = run_modestack("denoise " + input + "--no-mode-filter --max-memory " +
                                   std::to_string(held + 3'500'000) + " --json " + dir.file("d.json") + " -o " +
                                   dir.file("d/d.####.exr"));
     REQUIRE_MESSAGE(streamed.exit_code == 0, streamed.err);
-    auto json = nlohmann::json::parse(slurp(dir.file("d.json")));
+    auto json = nlohmann::json::parse(read_text(dir.file("d.json")));
     CHECK(json["in_memory"] == false);
     CHECK(json["passes"] == 2);
     CHECK(json["band_rows"] < 400);
@@ -235,7 +229,7 @@ TEST_CASE("denoise --method rsvd agrees with gram, --rank N is honoured, --save-
     CHECK(testkit::read_string_attribute(dir.file("r/d.0007.exr"), "modestack:solver") == "rsvd");
     CHECK(testkit::list_directory(dir.file("modes")) ==
           std::vector<std::string>{"mode.01.exr", "mode.02.exr", "temporal_modes.csv", "temporal_modes.json"});
-    std::string csv = slurp(dir.file("modes/temporal_modes.csv"));
+    std::string csv = read_text(dir.file("modes/temporal_modes.csv"));
     CHECK(csv.rfind("frame,mode1,mode2\n", 0) == 0);
     CHECK(std::count(csv.begin(), csv.end(), '\n') == kFrames + 1);
 }
@@ -254,7 +248,7 @@ TEST_CASE("denoise counts and replaces NaN/Inf, and --skip-existing leaves finis
                                 dir.file("out/d.####.exr") + " --json " + dir.file("s.json"));
     REQUIRE(result.exit_code == 0);
     CHECK(result.err.find("2 NaN/Inf values") != std::string::npos);
-    CHECK(nlohmann::json::parse(slurp(dir.file("s.json")))["outliers"]["non_finite"] == 2);
+    CHECK(nlohmann::json::parse(read_text(dir.file("s.json")))["outliers"]["non_finite"] == 2);
     for (float value : testkit::read_channels(dir.file("out/d.0005.exr"), kDiffInd))
         CHECK(std::isfinite(value));
 
@@ -262,7 +256,7 @@ TEST_CASE("denoise counts and replaces NaN/Inf, and --skip-existing leaves finis
     auto second = run_modestack("denoise " + dir.file("in.####.exr") + " --layer DiffInd --skip-existing -q -o " +
                                 dir.file("out/d.####.exr") + " --json " + dir.file("s2.json"));
     REQUIRE(second.exit_code == 0);
-    CHECK(nlohmann::json::parse(slurp(dir.file("s2.json")))["frames_written"] == 1);
+    CHECK(nlohmann::json::parse(read_text(dir.file("s2.json")))["frames_written"] == 1);
     CHECK(testkit::list_directory(dir.file("out")).size() == kFrames);
 }
 
@@ -277,7 +271,7 @@ TEST_CASE("denoise bad input: one line naming the problem, documented exit code,
     testkit::write_sequence(dir.file("mix.%04d.exr"), {4}, smaller, noisy_value);
     testkit::write_sequence(dir.file("trunc.%04d.exr"), {1, 2, 3}, layout(), noisy_value);
     {
-        std::string bytes = slurp(dir.file("trunc.0002.exr"));
+        std::string bytes = read_text(dir.file("trunc.0002.exr"));
         std::ofstream(dir.file("trunc.0002.exr"), std::ios::binary | std::ios::trunc) << bytes.substr(0, bytes.size() / 2);
     }
     std::string out = " -q -o " + dir.file("out/d.####.exr");

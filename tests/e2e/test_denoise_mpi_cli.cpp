@@ -85,10 +85,7 @@ TEST_CASE("mpirun -n 2 and -n 3: the pixels of one process, every frame written 
             CAPTURE(frame);
             CHECK(testkit::read_native(out + name) == testkit::read_native(dir.file("one") + name));
         }
-        std::ifstream json(out + ".json");
-        std::stringstream text;
-        text << json.rdbuf();
-        CHECK(text.str().find("\"stage\": \"write\"") != std::string::npos);
+        CHECK(testkit::read_text(out + ".json").find("\"stage\": \"write\"") != std::string::npos);
     }
 }
 

@@ -15,6 +15,7 @@
 
 using namespace modestack;
 using testkit::run_modestack;
+using testkit::read_text;
 using testkit::TempDir;
 
 namespace {
@@ -52,14 +53,6 @@ std::vector<int> frames(int first, int last)
     for (int f = first; f <= last; ++f)
         result.push_back(f);
     return result;
-}
-
-std::string slurp(const std::string& path)
-{
-    std::ifstream file(path);
-    std::stringstream text;
-    text << file.rdbuf();
-    return text.str();
 }
 
 void run_ok(const std::string& arguments)
@@ -104,10 +97,10 @@ TEST_CASE("denoise --stage: stats, solve and write tasks give the pixels of one 
         run_ok(in + method + "--stage write --solve " + job.file("shot.solve") + " --frames 10-12 -o " +
                job.file("farm/d.####.exr"));
         check_same_pixels(job.file("one"), job.file("farm"));
-        auto solve = nlohmann::json::parse(slurp(job.file("solve.json")));
+        auto solve = nlohmann::json::parse(read_text(job.file("solve.json")));
         CHECK(solve["farm"]["stage"] == "solve");
         CHECK(solve["outliers"]["fireflies"].get<int>() > 0);
-        auto write = nlohmann::json::parse(slurp(job.file("write.json")));
+        auto write = nlohmann::json::parse(read_text(job.file("write.json")));
         CHECK(write["frames_written"] == 5);
         CHECK(write["rank"]["n"] == solve["rank"]["n"]);
     }

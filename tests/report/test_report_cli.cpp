@@ -14,6 +14,7 @@
 
 using namespace modestack;
 using testkit::run_modestack;
+using testkit::read_text;
 using testkit::TempDir;
 
 namespace {
@@ -36,14 +37,6 @@ std::string make_shot(const TempDir& dir, int frames)
     return dir.file("noisy.%04d.exr");
 }
 
-std::string slurp(const std::string& path)
-{
-    std::ifstream file(path);
-    std::stringstream text;
-    text << file.rdbuf();
-    return text.str();
-}
-
 nlohmann::json page_data(const std::string& html)
 {
     const std::string open = "id=\"report-data\">";
@@ -62,12 +55,12 @@ TEST_CASE("denoise --report writes one self-contained page with the slider's mod
     auto result = run_modestack("denoise " + input + " -o " + dir.file("out/d.####.exr") + " --report " +
                                 dir.file("r.html") + " --json " + dir.file("d.json") + " -q");
     REQUIRE_MESSAGE(result.exit_code == 0, result.err);
-    std::string html = slurp(dir.file("r.html"));
+    std::string html = read_text(dir.file("r.html"));
     CHECK(html.rfind("<!DOCTYPE html>", 0) == 0);
     CHECK(html.find("http://") == std::string::npos);
     CHECK(html.find("https://") == std::string::npos);
     nlohmann::json page = page_data(html);
-    nlohmann::json summary = nlohmann::json::parse(slurp(dir.file("d.json")));
+    nlohmann::json summary = nlohmann::json::parse(read_text(dir.file("d.json")));
     int rank = summary["rank"]["n"];
     REQUIRE(page["segments"].size() == 1);
     CHECK(page["segments"][0]["rank"] == rank);
@@ -87,7 +80,7 @@ TEST_CASE("denoise --report with --segments shows each part and marks the cut")
     auto result = run_modestack("denoise " + input + " -o " + dir.file("out/d.####.exr") + " --segments 1-10,11-20" +
                                 " --report " + dir.file("r.html") + " -q");
     REQUIRE_MESSAGE(result.exit_code == 0, result.err);
-    std::string html = slurp(dir.file("r.html"));
+    std::string html = read_text(dir.file("r.html"));
     nlohmann::json page = page_data(html);
     REQUIRE(page["segments"].size() == 2);
     CHECK(page["segments"][1]["first"] == 10);
@@ -121,7 +114,7 @@ TEST_CASE("run writes report.html next to its outputs, with refined frames and r
     auto result = run_modestack("run --scene switch --size 32x24 --frames 30-37 --refine-spp 16 --budget 5 "
                                 "--reference-spp 16 -q -o " + dir.file("run"));
     REQUIRE_MESSAGE(result.exit_code == 0, result.err);
-    std::string html = slurp(dir.file("run/report.html"));
+    std::string html = read_text(dir.file("run/report.html"));
     nlohmann::json page = page_data(html);
     REQUIRE(page["frames"].size() == 3);
     std::vector<std::string> labels;
@@ -129,6 +122,6 @@ TEST_CASE("run writes report.html next to its outputs, with refined frames and r
         labels.push_back(panel["label"]);
     CHECK(labels == std::vector<std::string>{"noisy", "denoised", "refined", "sigma", "refine mask"});
     CHECK(html.find("true (against the reference)") != std::string::npos);
-    nlohmann::json summary = nlohmann::json::parse(slurp(dir.file("run/summary.json")));
+    nlohmann::json summary = nlohmann::json::parse(read_text(dir.file("run/summary.json")));
     CHECK(summary["outputs"]["report"] == dir.file("run/report.html"));
 }

@@ -130,15 +130,17 @@ CliResult run_modestack_under(const std::string& launcher, const std::string& ar
     int status = std::system(command.c_str());
     CliResult result;
     result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    auto slurp = [](const std::string& path) {
-        std::ifstream file(path);
-        std::stringstream text;
-        text << file.rdbuf();
-        return text.str();
-    };
-    result.out = slurp(capture.file("out"));
-    result.err = slurp(capture.file("err"));
+    result.out = read_text(capture.file("out"));
+    result.err = read_text(capture.file("err"));
     return result;
+}
+
+std::string read_text(const std::string& path)
+{
+    std::ifstream file(path);
+    std::stringstream text;
+    text << file.rdbuf();
+    return text.str();
 }
 
 std::vector<std::string> list_directory(const std::string& path)

@@ -63,6 +63,9 @@ CliResult run_modestack(const std::string& arguments);
 /// Runs `<launcher> modestack <arguments>`, e.g. under "mpirun -n 2".
 CliResult run_modestack_under(const std::string& launcher, const std::string& arguments);
 
+/// A file's whole contents ("" when it cannot be opened).
+std::string read_text(const std::string& path);
+
 /// Files in a directory (names only, sorted), hidden ones included.
 std::vector<std::string> list_directory(const std::string& path);
 
