@@ -9,16 +9,18 @@
 #include <filesystem>
 #include <regex>
 #include <set>
+#include <tuple>
 
 namespace modestack::app {
 namespace {
 
 denoise::Stage parse_stage(const std::string& name)
 {
-    for (denoise::Stage stage : {denoise::Stage::Statistics, denoise::Stage::Solve, denoise::Stage::Write})
+    for (denoise::Stage stage :
+         {denoise::Stage::Statistics, denoise::Stage::Solve, denoise::Stage::Modes, denoise::Stage::Write})
         if (name == denoise::stage_name(stage))
             return stage;
-    throw usage_error(fmt::format("--stage '{}' is not one of stats, solve, write", name));
+    throw usage_error(fmt::format("--stage '{}' is not one of stats, solve, modes, write", name));
 }
 
 // "I/K" (1 ≤ I ≤ K): task I of K equal shares; false when `text` is not of that form.
@@ -47,7 +49,7 @@ std::pair<int, int> share_of(int items, int index, int count)
 nlohmann::ordered_json method_options_given(const CLI::App& command)
 {
     static const std::set<std::string> excluded{"SEQ",      "--output",  "--stage",        "--rows",
-                                                "--stats",  "--solve",   "--frames",       "--json",
+                                                "--stats",  "--solve",   "--modes",        "--frames", "--json",
                                                 "--threads", "--quiet",  "--max-memory",   "--skip-existing",
                                                 "--report", "--save-modes", "--help"};
     nlohmann::ordered_json options = nlohmann::ordered_json::object();
@@ -75,34 +77,46 @@ void add_stage_options(CLI::App& command, StageOptions& options)
 {
     command.add_option("--stage", options.stage,
                        "Run one farm task of the denoise (README, farm jobs): stats (-o the statistics of --rows), "
-                       "solve (-o the basis from every --stats file) or write (the outputs of --frames from "
-                       "--solve); the outputs are byte-identical to one run with the same options");
+                       "solve (-o the basis from every --stats file), modes (-o the mode images of --rows from "
+                       "--solve) or write (the outputs of --frames from --solve and every --modes file, reading "
+                       "only those frames); the outputs are byte-identical to one run with the same options");
     command.add_option("--rows", options.rows,
-                       "--stage stats: the rows of this task, Y0-Y1 (inclusive; Y0 a multiple of 64, Y1 + 1 too or "
-                       "the last row) or I/K (share I of K)");
+                       "--stage stats and modes: the rows of this task, Y0-Y1 (inclusive; for stats Y0 a multiple "
+                       "of 64, Y1 + 1 too or the last row) or I/K (share I of K)");
     command.add_option("--stats", options.stats, "--stage solve: every statistics file of the shot, once");
-    command.add_option("--solve", options.solve, "--stage write: the solve task's file");
+    command.add_option("--solve", options.solve, "--stage modes and write: the solve task's file");
+    command.add_option("--modes", options.modes, "--stage write: every modes file of the shot, once");
 }
 
 StageRun::StageRun(const StageOptions& options, const CLI::App& command) : m_options(options), m_command(command)
 {
     m_task.stage = parse_stage(options.stage);
     const std::string name = denoise::stage_name(m_task.stage);
-    if (!options.rows.empty() && m_task.stage != denoise::Stage::Statistics)
-        throw usage_error(fmt::format("--rows belongs to --stage stats, not --stage {}", name));
+    const bool by_rows = m_task.stage == denoise::Stage::Statistics || m_task.stage == denoise::Stage::Modes;
+    const bool after_solve = m_task.stage == denoise::Stage::Modes || m_task.stage == denoise::Stage::Write;
+    if (!options.rows.empty() && !by_rows)
+        throw usage_error(fmt::format("--rows belongs to --stage stats or modes, not --stage {}", name));
     if (!options.stats.empty() && m_task.stage != denoise::Stage::Solve)
         throw usage_error(fmt::format("--stats belongs to --stage solve, not --stage {}", name));
-    if (!options.solve.empty() && m_task.stage != denoise::Stage::Write)
-        throw usage_error(fmt::format("--solve belongs to --stage write, not --stage {}", name));
-    if (m_task.stage == denoise::Stage::Statistics && options.rows.empty())
-        throw usage_error("--stage stats needs --rows Y0-Y1 or --rows I/K");
+    if (!options.solve.empty() && !after_solve)
+        throw usage_error(fmt::format("--solve belongs to --stage modes or write, not --stage {}", name));
+    if (!options.modes.empty() && m_task.stage != denoise::Stage::Write)
+        throw usage_error(fmt::format("--modes belongs to --stage write, not --stage {}", name));
+    if (by_rows && options.rows.empty())
+        throw usage_error(fmt::format("--stage {} needs --rows Y0-Y1 or --rows I/K", name));
     if (m_task.stage == denoise::Stage::Solve && options.stats.empty() && !options.stats_bytes)
         throw usage_error("--stage solve needs the statistics files of the shot: --stats FILE...");
-    if (m_task.stage == denoise::Stage::Write && options.solve.empty() && !options.solve_bytes)
-        throw usage_error("--stage write needs the solve task's file: --solve FILE");
+    if (after_solve && options.solve.empty() && !options.solve_bytes)
+        throw usage_error(fmt::format("--stage {} needs the solve task's file: --solve FILE", name));
+    if (m_task.stage == denoise::Stage::Write && options.modes.empty() && !options.modes_bytes)
+        throw usage_error("--stage write needs the modes files of the shot: --modes FILE...");
     for (const char* option : {"--report", "--save-modes", "--rank-map", "--segments", "--train-frames"})
         if (command.count(option) > 0)
             throw usage_error(fmt::format("--stage cannot be combined with {}: run it on one machine", option));
+    if (command.count("--non-negative-mode") > 0 &&
+        command.get_option("--non-negative-mode")->as<std::string>() == "keep-sum")
+        throw usage_error("--stage cannot be combined with --non-negative-mode keep-sum: it needs every frame of a "
+                          "pixel at once (use clamp, or run on one machine)");
     if (options.stats_bytes)
         m_statistics = *options.stats_bytes;
     for (const std::string& path : options.stats)
@@ -111,6 +125,10 @@ StageRun::StageRun(const StageOptions& options, const CLI::App& command) : m_opt
         m_solve = *options.solve_bytes;
     else if (!options.solve.empty())
         m_solve = read_stage_bytes(options.solve);
+    if (options.modes_bytes)
+        m_modes = *options.modes_bytes;
+    for (const std::string& path : options.modes)
+        m_modes.push_back(read_stage_bytes(path));
 }
 
 std::string StageRun::shot_frames(const std::string& frames_option) const
@@ -146,6 +164,25 @@ void StageRun::prepare(const io::FrameSequence& input, const io::SequenceReader&
     const int height = reader.height(), frames = static_cast<int>(input.frames.size());
     const int blocks = denoise::stage_blocks(height);
     switch (m_task.stage) {
+    case denoise::Stage::Modes: {  // any rows: its images do not depend on the bands
+        int index = 0, count = 0;
+        std::smatch match;
+        if (parse_share(m_options.rows, "--rows", index, count)) {
+            if (count > height)
+                throw usage_error(fmt::format("--rows {}: the shot has {} rows, fewer than {} tasks", m_options.rows,
+                                              height, count));
+            std::tie(m_task.row_begin, m_task.row_end) = share_of(height, index, count);
+        } else if (std::regex_match(m_options.rows, match, std::regex(R"((\d+)-(\d+))"))) {
+            m_task.row_begin = std::stoi(match[1]);
+            m_task.row_end = std::stoi(match[2]) + 1;
+            if (m_task.row_begin >= m_task.row_end || m_task.row_end > height)
+                throw usage_error(fmt::format("--rows {}: the shot has rows 0-{}", m_options.rows, height - 1));
+        } else {
+            throw usage_error(fmt::format("--rows '{}': write Y0-Y1 or I/K", m_options.rows));
+        }
+        read_solve(m_solve, m_fingerprint, m_task);
+        break;
+    }
     case denoise::Stage::Statistics: {
         int index = 0, count = 0, first = 0, last = 0;
         std::smatch match;
@@ -174,6 +211,7 @@ void StageRun::prepare(const io::FrameSequence& input, const io::SequenceReader&
         break;
     case denoise::Stage::Write:
         read_solve(m_solve, m_fingerprint, m_task);
+        read_modes(m_modes, m_solve, m_fingerprint, reader.width(), height, reader.selected_channel_count(), m_task);
         break;
     }
 }
@@ -183,7 +221,8 @@ void StageRun::finish(const std::string& output_path) const
     if (writes_frames())
         return;
     std::string bytes = m_task.stage == denoise::Stage::Statistics ? statistics_bytes(m_fingerprint, m_task)
-                                                                   : solve_bytes(m_fingerprint, m_task);
+                        : m_task.stage == denoise::Stage::Solve    ? solve_bytes(m_fingerprint, m_task)
+                                                                   : modes_bytes(m_fingerprint, m_solve, m_task);
     if (m_options.output_bytes)
         *m_options.output_bytes = std::move(bytes);
     else
@@ -193,13 +232,16 @@ void StageRun::finish(const std::string& output_path) const
 nlohmann::ordered_json StageRun::json() const
 {
     nlohmann::ordered_json json{{"stage", denoise::stage_name(m_task.stage)}};
-    if (m_task.stage == denoise::Stage::Statistics)
+    if (m_task.stage == denoise::Stage::Statistics || m_task.stage == denoise::Stage::Modes)
         json["rows"] = {m_task.row_begin, m_task.row_end - 1};
     if (m_task.stage == denoise::Stage::Solve)
         for (const StageBytes& input : m_statistics)
             json["statistics_files"].push_back(input.name);
-    if (m_task.stage == denoise::Stage::Write)
+    if (m_task.stage == denoise::Stage::Modes || m_task.stage == denoise::Stage::Write)
         json["solve_file"] = m_solve.name;
+    if (m_task.stage == denoise::Stage::Write)
+        for (const StageBytes& input : m_modes)
+            json["modes_files"].push_back(input.name);
     return json;
 }
 

@@ -3,8 +3,11 @@
 //   stats --rows Y0-Y1|I/K -o STATS   the Gram sums of a band of rows;
 //   solve --stats STATS... -o SOLVE   every band merged, the modes, N and the
 //                                     mode filter's survey (reads the shot once);
-//   write --solve SOLVE [--frames R|I/K] -o OUT.####.exr
-//                                     the outputs of some frames of the shot.
+//   modes --solve SOLVE --rows Y0-Y1|I/K -o MODES
+//                                     the mode images of a band of rows (and the
+//                                     noise and cleaned values sigma needs);
+//   write --solve SOLVE --modes MODES... [--frames R|I/K] -o OUT.####.exr
+//                                     the outputs of some frames, reading only those.
 // The outputs are byte-identical to one `denoise` run with the same options
 // (core/denoise/stage_task.h says why).
 #pragma once
@@ -23,14 +26,16 @@
 namespace modestack::app {
 
 struct StageOptions {
-    std::string stage;               ///< "", stats, solve or write
-    std::string rows;                ///< stats: Y0-Y1 (inclusive) or I/K
+    std::string stage;               ///< "", stats, solve, modes or write
+    std::string rows;                ///< stats, modes: Y0-Y1 (inclusive) or I/K
     std::vector<std::string> stats;  ///< solve: the statistics files
-    std::string solve;               ///< write: the solve file
+    std::string solve;               ///< modes, write: the solve file
+    std::vector<std::string> modes;  ///< write: the modes files
     /// An MPI job (mpi_job.h) passes the files' bytes in memory instead:
     const std::vector<StageBytes>* stats_bytes = nullptr;  ///< solve input, instead of --stats
-    const StageBytes* solve_bytes = nullptr;                ///< write input, instead of --solve
-    std::string* output_bytes = nullptr;                    ///< stats or solve output, instead of -o
+    const StageBytes* solve_bytes = nullptr;                ///< modes and write input, instead of --solve
+    const std::vector<StageBytes>* modes_bytes = nullptr;   ///< write input, instead of --modes
+    std::string* output_bytes = nullptr;                    ///< stats, solve or modes output, instead of -o
 };
 
 void add_stage_options(CLI::App& command, StageOptions& options);
@@ -52,7 +57,7 @@ public:
     /// Fingerprints the shot and reads the task's input files.
     void prepare(const io::FrameSequence& input, const io::SequenceReader& reader);
     denoise::StageTask& task() { return m_task; }
-    /// Stats and solve of an MPI rank: the output goes to output_bytes, not to -o.
+    /// Stats, solve and modes of an MPI rank: the output goes to output_bytes, not to -o.
     bool output_in_memory() const { return m_options.output_bytes != nullptr; }
     void finish(const std::string& output_path) const;
     /// What the task did, for the JSON summary.
@@ -64,7 +69,8 @@ private:
     denoise::StageTask m_task;
     ShotFingerprint m_fingerprint;
     std::vector<StageBytes> m_statistics;  ///< solve: the statistics files
-    StageBytes m_solve;                    ///< write: the solve file
+    StageBytes m_solve;                    ///< modes, write: the solve file
+    std::vector<StageBytes> m_modes;       ///< write: the modes files
 };
 
 }  // namespace modestack::app

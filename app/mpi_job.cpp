@@ -55,6 +55,29 @@ public:
         return gathered;
     }
 
+    /// Every rank's `mine` at every rank, in rank order (`what` names them in errors).
+    std::vector<StageBytes> all_gather(const std::string& mine, const std::string& what) const
+    {
+        int length = static_cast<int>(mine.size());
+        std::vector<int> lengths(m_size), offsets(m_size);
+        MPI_Allgather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, MPI_COMM_WORLD);
+        long long total = 0;
+        for (int r = 0; r < m_size; ++r) {
+            offsets[r] = static_cast<int>(total);
+            total += lengths[r];
+        }
+        if (total > 2'000'000'000)
+            throw bad_input("mpirun", fmt::format("the ranks' {} exceed 2 GB: use the farm stages (--stage) with files",
+                                                  what));
+        std::string all(static_cast<size_t>(total), '\0');
+        MPI_Allgatherv(mine.data(), length, MPI_BYTE, all.data(), lengths.data(), offsets.data(), MPI_BYTE,
+                       MPI_COMM_WORLD);
+        std::vector<StageBytes> gathered;
+        for (int r = 0; r < m_size; ++r)
+            gathered.push_back({fmt::format("the {} of rank {}", what, r), all.substr(offsets[r], lengths[r])});
+        return gathered;
+    }
+
     /// Rank 0's `bytes` at every rank.
     std::string broadcast(std::string bytes) const
     {
@@ -114,9 +137,20 @@ int run_mpi_denoise(const std::string& frames, const RunStage& run_stage)
         }
         const StageBytes solve_file{"the solve of rank 0", mpi.broadcast(std::move(solved))};
 
+        StageOptions modes;
+        modes.stage = "modes";
+        modes.rows = share;
+        modes.solve_bytes = &solve_file;
+        std::string mode_images;
+        modes.output_bytes = &mode_images;
+        if (int code = run_stage(modes, frames, lead); code != 0)
+            mpi.abort("the modes stage failed", code);
+        const std::vector<StageBytes> all_modes = mpi.all_gather(mode_images, "modes");
+
         StageOptions write;
         write.stage = "write";
         write.solve_bytes = &solve_file;
+        write.modes_bytes = &all_modes;
         return run_stage(write, share, lead);
     } catch (const Error& error) {
         mpi.abort(error.what(), exit_code(error.kind()));

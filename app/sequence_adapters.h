@@ -91,6 +91,7 @@ public:
     void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma) override;
     void write_mode_rows(int row_begin, int row_end, int modes, const float* spatial_modes) override;
     bool wants_modes() const override { return !m_modes_directory.empty(); }
+    bool writes_frame(int frame_index) const override { return !m_paths[static_cast<size_t>(frame_index)].empty(); }
     void write_rank_rows(int row_begin, int row_end, const float* ranks) override;
 
 private:

@@ -35,11 +35,18 @@ public:
         for (Eigen::Index i = 0; i < state.frame_sum.size(); ++i)
             add(state.frame_sum[i]);
     }
+    /// Floats follow every double in the file.
+    void add_floats(const std::vector<float>& values)
+    {
+        m_floats.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float));
+    }
     std::size_t doubles() const { return m_bytes.size() / sizeof(double); }
-    const std::string& bytes() const { return m_bytes; }
+    std::size_t floats() const { return m_floats.size() / sizeof(float); }
+    std::string bytes() const { return m_bytes + m_floats; }
 
 private:
     std::string m_bytes;
+    std::string m_floats;
 };
 
 // Doubles per Gram accumulator of `frames` frames (see Payload::add_gram).
@@ -48,7 +55,7 @@ std::size_t gram_doubles(int frames) { return 3 * static_cast<std::size_t>(frame
 // Reads the numbers of a file back, in the order they were added.
 class PayloadReader {
 public:
-    PayloadReader(const char* data, std::size_t doubles) : m_data(data), m_left(doubles) {}
+    PayloadReader(const char* data, std::size_t doubles) : m_data(data), m_left(doubles), m_floats(data + doubles * sizeof(double)) {}
     double next()
     {
         if (m_left == 0)
@@ -67,6 +74,14 @@ public:
                 matrix(i, j) = matrix(j, i) = next();
         return matrix;
     }
+    /// The next `count` floats of the float part.
+    std::vector<float> floats(std::size_t count)
+    {
+        std::vector<float> values(count);
+        std::memcpy(values.data(), m_floats, count * sizeof(float));
+        m_floats += count * sizeof(float);
+        return values;
+    }
     lowrank::GramAccumulator gram(int frames, std::int64_t rows, std::int64_t tiles)
     {
         lowrank::GramAccumulator::State state;
@@ -84,11 +99,14 @@ public:
 private:
     const char* m_data;
     std::size_t m_left;
+    const char* m_floats;
 };
 
 std::string stage_bytes(nlohmann::ordered_json header, const Payload& payload)
 {
     header["doubles"] = payload.doubles();
+    if (payload.floats() > 0)
+        header["floats"] = payload.floats();
     return std::string(kMagic) + "\n" + header.dump() + "\n" + payload.bytes();
 }
 
@@ -116,7 +134,7 @@ struct StageFile {
 
     PayloadReader payload() const
     {
-        return {bytes.data() + payload_offset, (bytes.size() - payload_offset) / sizeof(double)};
+        return {bytes.data() + payload_offset, header.at("doubles").get<std::size_t>()};
     }
 };
 
@@ -158,7 +176,8 @@ StageFile parse_stage_file(const std::string& path, std::string bytes, denoise::
         if (found != denoise::stage_name(stage))
             throw bad_input(path, fmt::format("is the output of --stage {}, not of --stage {}", found,
                                               denoise::stage_name(stage)));
-        if (file.bytes.size() - file.payload_offset != file.header.at("doubles").get<std::size_t>() * sizeof(double))
+        if (file.bytes.size() - file.payload_offset != file.header.at("doubles").get<std::size_t>() * sizeof(double) +
+                                                           file.header.value("floats", std::size_t(0)) * sizeof(float))
             throw bad_input(path, "damaged stage file: its size does not match its header (cut off?)");
         const nlohmann::json shot = fingerprint.shot, options = fingerprint.options;
         if (file.header.at("shot") != shot)
@@ -172,6 +191,46 @@ StageFile parse_stage_file(const std::string& path, std::string bytes, denoise::
         throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
     }
     return file;
+}
+
+// The rows [begin, end) a file of a job holds.
+struct RowBand {
+    int begin, end;
+    std::size_t file;
+};
+
+// Sorts `bands` by row and checks that they hold every row of a shot of
+// `height` rows exactly once; errors name the file (`kind`: "statistics", "modes").
+void check_row_coverage(std::vector<RowBand>& bands, const std::vector<StageFile>& files, int height,
+                        const std::string& kind)
+{
+    std::sort(bands.begin(), bands.end(), [](const RowBand& a, const RowBand& b) { return a.begin < b.begin; });
+    int covered = 0;
+    for (const RowBand& band : bands) {
+        const std::string& path = files[band.file].path;
+        if (band.begin < covered) {
+            auto other = std::find_if(bands.begin(), bands.end(), [&](const RowBand& b) {
+                return &b != &band && b.begin < band.end && band.begin < b.end;
+            });
+            throw bad_input(path, fmt::format("rows {}-{} are also in {}: each band of rows must be given once",
+                                              band.begin, band.end - 1, files[other->file].path));
+        }
+        if (band.begin > covered)
+            throw bad_input(path, fmt::format("rows {}-{} are in no {} file given", covered, band.begin - 1, kind));
+        covered = band.end;
+    }
+    if (covered < height)
+        throw bad_input(files[bands.back().file].path,
+                        fmt::format("rows {}-{} are in no {} file given", covered, height - 1, kind));
+}
+
+// FNV-1a of a solve file: the modes files name the solve they were made from.
+std::string solve_digest(const StageBytes& solve)
+{
+    std::uint64_t hash = 1469598103934665603ull;
+    for (unsigned char c : solve.bytes)
+        hash = (hash ^ c) * 1099511628211ull;
+    return fmt::format("{:016x}", hash);
 }
 
 }  // namespace
@@ -219,12 +278,8 @@ void read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprin
 {
     if (inputs.empty())
         throw usage_error("--stage solve needs the statistics files of the job: --stats FILE...");
-    struct Band {
-        int begin, end;
-        std::size_t file;
-    };
     std::vector<StageFile> files;
-    std::vector<Band> bands;
+    std::vector<RowBand> bands;
     for (const StageBytes& input : inputs) {
         const std::string& path = input.name;
         files.push_back(parse_stage_file(path, input.bytes, denoise::Stage::Statistics, fingerprint));
@@ -241,27 +296,10 @@ void read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprin
             throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
         }
     }
-    std::sort(bands.begin(), bands.end(), [](const Band& a, const Band& b) { return a.begin < b.begin; });
-    int covered = 0;
-    for (const Band& band : bands) {
-        const std::string& path = files[band.file].path;
-        if (band.begin < covered) {
-            auto other = std::find_if(bands.begin(), bands.end(), [&](const Band& b) {
-                return &b != &band && b.begin < band.end && band.begin < b.end;
-            });
-            throw bad_input(path, fmt::format("rows {}-{} are also in {}: each band of rows must be given once",
-                                              band.begin, band.end - 1, files[other->file].path));
-        }
-        if (band.begin > covered)
-            throw bad_input(path, fmt::format("rows {}-{} are in no statistics file given", covered, band.begin - 1));
-        covered = band.end;
-    }
-    if (covered < height)
-        throw bad_input(files[bands.back().file].path,
-                        fmt::format("rows {}-{} are in no statistics file given", covered, height - 1));
+    check_row_coverage(bands, files, height, "statistics");
     task.gram_blocks.clear();
     task.outliers = {};
-    for (const Band& band : bands) {
+    for (const RowBand& band : bands) {
         const StageFile& file = files[band.file];
         PayloadReader payload = file.payload();
         for (const nlohmann::json& block : file.header.at("blocks"))
@@ -314,6 +352,87 @@ void read_solve(const StageBytes& solve, const ShotFingerprint& fingerprint, den
                 value = payload.next();
     } catch (const nlohmann::json::exception& error) {
         throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
+    }
+}
+
+std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const denoise::StageTask& task)
+{
+    if (task.modes.size() != 1)
+        throw internal_error("modes_bytes: a modes task has one band");
+    const denoise::ModesBand& band = task.modes.front();
+    nlohmann::ordered_json header = header_for(denoise::Stage::Modes, fingerprint, 0);
+    header["solve"] = solve_digest(solve);
+    header["rows"] = {band.row_begin, band.row_end};
+    header["residual_modes"] = band.residual_modes;
+    header["output_modes"] = band.output_modes;
+    header["gain_modes"] = band.gain_modes;
+    header["patches"] = band.patches.size();
+    Payload payload;
+    for (const denoise::ModesBand::Patch& patch : band.patches) {
+        payload.add(patch.frame);
+        payload.add(static_cast<double>(patch.sample));
+        payload.add(patch.value);
+    }
+    for (const std::vector<float>* values : {&band.residual, &band.output, &band.noise_variance, &band.gains})
+        payload.add_floats(*values);
+    return stage_bytes(header, payload);
+}
+
+void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, const ShotFingerprint& fingerprint,
+                int width, int height, int channels, denoise::StageTask& task)
+{
+    if (inputs.empty())
+        throw usage_error("--stage write needs the modes files of the shot: --modes FILE...");
+    const std::string digest = solve_digest(solve);
+    std::vector<StageFile> files;
+    std::vector<RowBand> bands;
+    for (const StageBytes& input : inputs) {
+        const std::string& path = input.name;
+        files.push_back(parse_stage_file(path, input.bytes, denoise::Stage::Modes, fingerprint));
+        const nlohmann::json& header = files.back().header;
+        try {
+            if (header.at("solve").get<std::string>() != digest)
+                throw bad_input(path, fmt::format("was made from another solve file than {}", solve.name));
+            const int begin = header.at("rows").at(0).get<int>(), end = header.at("rows").at(1).get<int>();
+            const std::size_t samples = static_cast<std::size_t>(width) * channels * std::max(0, end - begin);
+            const std::size_t floats =
+                samples * (header.at("residual_modes").get<std::size_t>() + header.at("output_modes").get<std::size_t>() + 1) +
+                samples / channels * header.at("gain_modes").get<std::size_t>();
+            if (begin < 0 || end > height || begin >= end || header.value("floats", std::size_t(0)) != floats ||
+                header.at("doubles").get<std::size_t>() != 3 * header.at("patches").get<std::size_t>())
+                throw bad_input(path, "damaged modes file: its sizes do not fit the shot");
+            bands.push_back({begin, end, files.size() - 1});
+        } catch (const nlohmann::json::exception& error) {
+            throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
+        }
+    }
+    check_row_coverage(bands, files, height, "modes");
+    task.modes.clear();
+    for (const RowBand& row_band : bands) {
+        const StageFile& file = files[row_band.file];
+        denoise::ModesBand band;
+        band.row_begin = row_band.begin;
+        band.row_end = row_band.end;
+        band.residual_modes = file.header.at("residual_modes").get<int>();
+        band.output_modes = file.header.at("output_modes").get<int>();
+        band.gain_modes = file.header.at("gain_modes").get<int>();
+        const std::size_t samples = static_cast<std::size_t>(width) * channels * (band.row_end - band.row_begin);
+        PayloadReader payload = file.payload();
+        band.patches.resize(file.header.at("patches").get<std::size_t>());
+        for (denoise::ModesBand::Patch& patch : band.patches) {
+            patch.frame = static_cast<int>(payload.next());
+            patch.sample = static_cast<std::int64_t>(payload.next());
+            patch.value = static_cast<float>(payload.next());
+        }
+        band.residual = payload.floats(samples * band.residual_modes);
+        band.output = payload.floats(samples * band.output_modes);
+        band.noise_variance = payload.floats(samples);
+        band.gains = payload.floats(samples / channels * band.gain_modes);
+        if (!task.modes.empty() && (band.residual_modes != task.modes.front().residual_modes ||
+                                    band.output_modes != task.modes.front().output_modes ||
+                                    band.gain_modes != task.modes.front().gain_modes))
+            throw bad_input(file.path, "damaged modes file: its modes differ from the other files'");
+        task.modes.push_back(std::move(band));
     }
 }
 

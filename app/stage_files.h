@@ -1,9 +1,10 @@
 // The files a farm denoise passes between its tasks (`denoise --stage`, issue 11;
-// core/denoise/stage_task.h): a statistics task's block sums, and the solve
-// task's merged sums and mode-filter survey. Each file is one text line naming
-// the format, one line of JSON (the stage, the shot's fingerprint, sizes,
-// counts) and the numbers as raw little-endian doubles, so that every bit
-// survives the trip.
+// core/denoise/stage_task.h): a statistics task's block sums, the solve task's
+// merged sums and mode-filter survey, and a modes task's images of its rows.
+// Each file is one text line naming the format, one line of JSON (the stage,
+// the shot's fingerprint, sizes, counts) and the numbers as raw little-endian
+// doubles, then floats (a modes file's images), so that every bit survives the
+// trip.
 //
 // The fingerprint says which shot and which method a file belongs to: the input
 // frames (numbers, file names without their directory, byte sizes), the shot's
@@ -57,5 +58,13 @@ std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::Stage
 /// Reads a solve file made for `fingerprint` into task.gram, task.outliers and
 /// task.survey_rows.
 void read_solve(const StageBytes& solve, const ShotFingerprint& fingerprint, denoise::StageTask& task);
+
+/// A modes task's output (its one band in task.modes), tied to the solve file it used.
+std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const denoise::StageTask& task);
+
+/// Checks the modes files of a job: made for `fingerprint` from `solve`, every
+/// row of the shot once. Fills task.modes in row order.
+void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, const ShotFingerprint& fingerprint,
+                int width, int height, int channels, denoise::StageTask& task);
 
 }  // namespace modestack::app

@@ -1,5 +1,6 @@
 #include "core/denoise/engine.h"
 #include "core/denoise/block_gram.h"
+#include "core/denoise/stage_modes.h"
 #include "core/denoise/training.h"
 
 #include "core/common/error.h"
@@ -10,10 +11,13 @@
 #include "core/lowrank/shrinkage.h"
 
 #include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <chrono>
+#include <cstring>
+#include <mutex>
 #include <optional>
 
 namespace modestack::denoise {
@@ -88,7 +92,7 @@ public:
         double survey_seconds = 0;
         if (m_settings.mode_filter.enabled) {
             auto survey_start = Clock::now();
-            if (in_stage(Stage::Write))
+            if (in_stage(Stage::Modes) || in_stage(Stage::Write))
                 restore_mode_filter_survey(basis);
             else
                 survey_mode_filter(basis);
@@ -125,11 +129,18 @@ private:
             check_statistics_rows(task.row_begin, task.row_end, m_shape.height);
         if (task.stage == Stage::Solve && static_cast<int>(task.gram_blocks.size()) != stage_blocks(m_shape.height))
             throw internal_error("the solve stage needs every block's sums");
-        if (task.stage == Stage::Write && !task.gram)
-            throw internal_error("the write stage needs the merged sums");
-        if (task.stage == Stage::Write && m_settings.mode_filter.enabled &&
-            static_cast<int>(task.survey_rows.size()) != m_shape.height)
-            throw internal_error("the write stage needs the mode filter's survey of every row");
+        const bool after_solve = task.stage == Stage::Modes || task.stage == Stage::Write;
+        if (task.stage == Stage::Modes && (task.row_begin < 0 || task.row_begin >= task.row_end || task.row_end > m_shape.height))
+            throw usage_error(fmt::format("--rows {}-{}: the shot has rows 0-{}", task.row_begin, task.row_end - 1,
+                                          m_shape.height - 1));
+        if (after_solve && m_settings.non_negative == NonNegativeMode::KeepSum)
+            throw usage_error(fmt::format("--stage {} cannot be combined with --non-negative-mode keep-sum: it "
+                                          "needs every frame of a pixel; use clamp or run on one machine",
+                                          name));
+        if (after_solve && !task.gram)
+            throw internal_error("the modes and write stages need the merged sums");
+        if (after_solve && m_settings.mode_filter.enabled && static_cast<int>(task.survey_rows.size()) != m_shape.height)
+            throw internal_error("the modes and write stages need the mode filter's survey of every row");
     }
 
     // --stage stats: pass 1 over the task's rows, each block's sums kept apart.
@@ -205,6 +216,16 @@ private:
         tbb::parallel_for(0, m_shape.frames, [&](int frame) {
             m_source.read_rows(frame, row_begin, row_end, band.data + frame * band.rows);
         });
+        const PatchRows patch_rows = m_patches;
+        std::vector<float> as_read;  // --stage modes: the patch rows as the files hold them
+        const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
+        const std::int64_t patch_first = (patch_rows.row_begin - row_begin) * row_samples;
+        const std::int64_t patch_samples = (patch_rows.row_end - patch_rows.row_begin) * row_samples;
+        if (patch_rows.patches) {
+            as_read.resize(static_cast<size_t>(patch_samples) * m_shape.frames);
+            for (int t = 0; t < m_shape.frames; ++t)
+                std::copy_n(band.data + t * band.rows + patch_first, patch_samples, as_read.begin() + t * patch_samples);
+        }
         // The first read of a row finds its outliers and marks the rows it changed;
         // later reads of a streamed shot redo only the marked rows (same input,
         // same result), instead of three medians for every sample again.
@@ -220,6 +241,15 @@ private:
         } else {
             lowrank::clean_marked_outliers(band.view(m_shape.frames), m_settings.outliers,
                                            m_cleaned_samples.data() + first_sample);
+        }
+        if (patch_rows.patches) {  // bitwise, so that a replaced NaN counts too
+            const std::int64_t first = (patch_rows.row_begin - patch_rows.first_row) * row_samples;
+            for (int t = 0; t < m_shape.frames; ++t)
+                for (std::int64_t i = 0; i < patch_samples; ++i) {
+                    const float cleaned = band.data[t * band.rows + patch_first + i];
+                    if (std::memcmp(&cleaned, &as_read[static_cast<size_t>(t * patch_samples + i)], sizeof cleaned))
+                        patch_rows.patches->push_back({t, first + i, cleaned});
+                }
         }
     }
 
@@ -478,33 +508,33 @@ private:
     }
 
     // The mode filter's part of pass 2 for rows [row, end) of `data`: filters the
-    // first `rank` coefficient images in place (valid rows only) and writes the noise
-    // each rebuilt sample keeps, h_t(p) = Σ_j V_tj² · gain_j(p), for sigma.
+    // first `modes` coefficient images in place (valid rows only) and leaves in
+    // `gains` the noise each filtered mode keeps per valid pixel (gain_j(p)), from
+    // which sigma's kept noise per frame follows (kept_noise_of_frame).
     // With --rank-map, `ranks` receives each valid pixel's rank and every filtered
     // mode is scaled by its blend weight at the pixel (rank_map.h).
-    void filter_band(std::vector<float>& coefficients, const Band& data, const Eigen::MatrixXd& temporal, int rank,
-                     int row, int end, std::vector<float>& kept_noise, std::vector<float>* ranks)
+    void filter_band(std::vector<float>& coefficients, const Band& data, int modes, int row, int end,
+                     std::vector<float>& gains, std::vector<float>* ranks)
     {
-        const int frames = m_shape.frames;
         const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
         const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
-        lowrank::BandView noisy = data.view(frames).view();
+        lowrank::BandView noisy = data.view(m_shape.frames).view();
         lowrank::BandView surveyed{coefficients.data(), data.rows, m_filter_modes, data.rows};
         lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
         std::vector<float>& filtered = m_filtered;  // filter_coefficients writes every value
-        filtered.resize(static_cast<size_t>(valid) * rank);
-        std::vector<float> noise_variance, gains, features;
+        filtered.resize(static_cast<size_t>(valid) * modes);
+        std::vector<float> noise_variance, features;
         coefficient_noise_variance(noisy, surveyed, shape, m_settings.mode_filter.noise_radius, noise_variance);
         filter_coefficients(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin,
-                            m_report.mode_filter, rank, {filtered.data(), valid, rank, valid}, gains,
+                            m_report.mode_filter, modes, {filtered.data(), valid, modes, valid}, gains,
                             band_features(data, features));
         const std::int64_t valid_pixels = valid / m_shape.channels;
         if (ranks) {
             std::vector<float> weights;
             local_rank(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin,
-                       m_report.mode_filter, m_report.rank.rank, rank, gains, m_settings.rank_map.radius, weights,
+                       m_report.mode_filter, m_report.rank.rank, modes, gains, m_settings.rank_map.radius, weights,
                        *ranks);
-            for (int j = 0; j < rank; ++j)
+            for (int j = 0; j < modes; ++j)
                 for (std::int64_t i = 0; i < valid; ++i) {
                     const float weight = weights[static_cast<size_t>(j * valid_pixels + i / m_shape.channels)];
                     filtered[static_cast<size_t>(j * valid + i)] *= weight;
@@ -512,44 +542,123 @@ private:
                         gains[static_cast<size_t>(j * valid_pixels + i / m_shape.channels)] *= weight * weight;
                 }
         }
-        for (int j = 0; j < rank; ++j)
+        for (int j = 0; j < modes; ++j)
             std::copy(filtered.begin() + j * valid, filtered.begin() + (j + 1) * valid,
                       coefficients.begin() + j * data.rows + offset);
-        kept_noise.resize(static_cast<size_t>(valid) * frames);
-        tbb::parallel_for(0, frames, [&](int t) {
-            for (std::int64_t i = 0; i < valid; ++i) {
-                const std::int64_t pixel = i / m_shape.channels;
-                double kept = 0;
-                for (int j = 0; j < rank; ++j)
-                    kept += temporal(t, j) * temporal(t, j) * gains[static_cast<size_t>(j * valid_pixels + pixel)];
-                kept_noise[static_cast<size_t>(t * valid + i)] = static_cast<float>(kept);
-            }
-        });
+    }
+
+    // The temporal matrices of pass 2 (what a whole run, a modes task and a write task share).
+    struct RebuildBasis {
+        int rank = 0;           // N
+        int rebuild_modes = 0;  // modes the outputs are rebuilt from (more than N with --rank-map)
+        int projected = 0;      // modes projected on (the mode filter's noise estimate needs its survey's)
+        Eigen::MatrixXd temporal;            // F × rebuild_modes: the rebuild weights (B, smoothed)
+        Eigen::MatrixXd temporal_rank;       // F × N of them: the unfiltered rebuild sigma's residual uses
+        Eigen::MatrixXd temporal_projected;  // F × projected: the projection (A)
+        Eigen::VectorXd leverages;           // h_t for sigma
+    };
+
+    RebuildBasis rebuild_basis(const lowrank::Basis& basis, int rank)
+    {
+        RebuildBasis result;
+        result.rank = rank;
+        // --rank-map: pixels may use modes beyond N, up to those the filter surveyed.
+        result.rebuild_modes = m_settings.rank_map.enabled
+                                   ? std::max(rank, std::min(rank + m_settings.rank_map.extra_modes, m_filter_modes))
+                                   : rank;
+        // With training frames the projection (A) and the rebuild (B) differ: training.h.
+        result.temporal =
+            m_training ? m_training->weights(basis, rank) : Eigen::MatrixXd(basis.temporal.leftCols(result.rebuild_modes));
+        const bool smooth = m_settings.weight_smoothing.enabled;  // --weight-smoothing: B smoothed, A kept
+        if (smooth)
+            result.temporal =
+                smooth_temporal_weights(result.temporal, m_settings.weight_smoothing, m_report.weight_smoothing);
+        result.temporal_rank = result.temporal.leftCols(rank);
+        result.leverages =
+            m_training || smooth
+                ? training_leverages(m_training ? m_training->projector(basis, rank) : basis.temporal.leftCols(rank),
+                                     result.temporal_rank)
+                : lowrank::leverages(basis, rank);
+        if (m_settings.optimal_shrinkage)
+            m_report.shrinkage = lowrank::optimal_shrinkage_factors(basis, m_report.rank.noise_sigma, rank);
+        result.projected = m_settings.mode_filter.enabled ? std::max(result.rebuild_modes, m_filter_modes) : rank;
+        result.temporal_projected =
+            m_training ? m_training->projector(basis, result.projected) : basis.temporal.leftCols(result.projected);
+        return result;
+    }
+
+    // Modes the outputs are rebuilt from (0: the unfiltered N of sigma's residual).
+    int output_modes(const RebuildBasis& modes) const
+    {
+        return m_settings.mode_filter.enabled ? modes.rebuild_modes : m_settings.optimal_shrinkage ? modes.rank : 0;
+    }
+
+    // Pass 2 up to the frames, for rows [row, end) of `data` (a band with its halo):
+    // the coefficients (valid rows filtered and shrunk, halo rows as projected), the
+    // unfiltered rebuild of the whole band (sigma's residual), s² and the kept-noise
+    // gains of the valid rows. `residual` (optional) receives the valid rows' N
+    // unfiltered coefficient images before the filter changes them.
+    void prepare_band(const Band& data, int row, int end, const RebuildBasis& modes, std::vector<float>* residual,
+                      std::vector<float>* ranks)
+    {
+        const int frames = m_shape.frames;
+        const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
+        const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
+        lowrank::BandView noisy = data.view(frames).view();
+        m_coefficients.resize(static_cast<size_t>(data.rows) * modes.projected);  // every value written below
+        lowrank::MutableBandView coefficient_view{m_coefficients.data(), data.rows, modes.projected, data.rows};
+        lowrank::project_coefficients(noisy, modes.temporal_projected, coefficient_view);
+        m_rebuilt.resize(static_cast<size_t>(data.rows) * frames);
+        lowrank::rebuild_from_coefficients({m_coefficients.data(), data.rows, modes.rank, data.rows},
+                                           modes.temporal_rank, {m_rebuilt.data(), data.rows, frames, data.rows});
+        if (residual) {
+            residual->resize(static_cast<size_t>(valid) * modes.rank);
+            for (int j = 0; j < modes.rank; ++j)
+                std::copy_n(m_coefficients.begin() + j * data.rows + offset, valid, residual->begin() + j * valid);
+        }
+        lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
+        m_noise_variance.resize(static_cast<size_t>(valid));
+        lowrank::residual_noise_variance(noisy, {m_rebuilt.data(), data.rows, frames, data.rows}, shape, modes.rank,
+                                         row - data.row_begin, end - data.row_begin, m_confidence,
+                                         m_noise_variance.data());
+        if (m_settings.mode_filter.enabled)
+            filter_band(m_coefficients, data, modes.rebuild_modes, row, end, m_gains, ranks);
+        for (size_t j = 0; j < m_report.shrinkage.size(); ++j)  // --shrink optimal, the band's own rows
+            for (std::int64_t i = 0; i < valid; ++i)
+                m_coefficients[j * data.rows + offset + i] *= static_cast<float>(m_report.shrinkage[j]);
+    }
+
+    // The noise each rebuilt sample of frame t keeps under the mode filter,
+    // h_t(p) = Σ_j V_tj² · gain_j(p), for `samples` samples of the gains' pixels.
+    void kept_noise_of_frame(const Eigen::MatrixXd& temporal, int t, int modes, const float* gains,
+                             std::int64_t samples, float* kept) const
+    {
+        const std::int64_t pixels = samples / m_shape.channels;
+        for (std::int64_t i = 0; i < samples; ++i) {
+            const std::int64_t pixel = i / m_shape.channels;
+            double sum = 0;
+            for (int j = 0; j < modes; ++j)
+                sum += temporal(t, j) * temporal(t, j) * gains[static_cast<size_t>(j * pixels + pixel)];
+            kept[i] = static_cast<float>(sum);
+        }
     }
 
     void rebuild(const lowrank::Basis& basis, int rank)
     {
+        const RebuildBasis modes = rebuild_basis(basis, rank);
+        m_confidence.radius = m_settings.sigma_radius;
+        if (in_stage(Stage::Modes)) {
+            modes_stage(modes);
+            return;
+        }
+        if (in_stage(Stage::Write)) {
+            write_stage(modes);
+            return;
+        }
         const BandPlan& plan = m_report.plan;
-        // --rank-map: pixels may use modes beyond N, up to those the filter surveyed.
-        const bool rank_map = m_settings.rank_map.enabled;
-        const int rebuild_modes =
-            rank_map ? std::max(rank, std::min(rank + m_settings.rank_map.extra_modes, m_filter_modes)) : rank;
-        // With training frames the projection (A) and the rebuild (B) differ: training.h.
-        Eigen::MatrixXd temporal =
-            m_training ? m_training->weights(basis, rank) : basis.temporal.leftCols(rebuild_modes);
-        const bool smooth = m_settings.weight_smoothing.enabled;  // --weight-smoothing: B smoothed, A kept
-        if (smooth)
-            temporal = smooth_temporal_weights(temporal, m_settings.weight_smoothing, m_report.weight_smoothing);
-        const Eigen::MatrixXd temporal_rank = temporal.leftCols(rank);  // N modes: sigma's residual
-        Eigen::VectorXd leverages =
-            m_training || smooth
-                ? training_leverages(m_training ? m_training->projector(basis, rank) : basis.temporal.leftCols(rank),
-                                     temporal_rank)
-                : lowrank::leverages(basis, rank);
-        int frames = m_shape.frames;
-        std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
-        lowrank::ConfidenceOptions confidence;
-        confidence.radius = m_settings.sigma_radius;
+        const bool rank_map = m_settings.rank_map.enabled, filter = m_settings.mode_filter.enabled;
+        const int frames = m_shape.frames, output = output_modes(modes);
+        const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
 
         bool kept = plan.in_memory;  // pass 2 reuses the kept shot: no second read
         ensure_whole_shot();
@@ -557,64 +666,46 @@ private:
             ++m_report.passes;
         m_sink.begin({rank, m_report.rank.rule, m_report.solver});
         m_progress.begin("rebuilding frames", m_shape.height);
-        const bool filter = m_settings.mode_filter.enabled;
-        if (m_settings.optimal_shrinkage)
-            m_report.shrinkage = lowrank::optimal_shrinkage_factors(basis, m_report.rank.noise_sigma, rank);
-        // With the mode filter, pass 2 also projects on the surveyed modes: its noise
-        // estimate needs the energy they leave.
-        const int projected = filter ? std::max(rebuild_modes, m_filter_modes) : rank;
         if (rank_map)
-            m_report.rank_map.largest_rank = rebuild_modes;
-        Eigen::MatrixXd temporal_projected =
-            m_training ? m_training->projector(basis, projected) : basis.temporal.leftCols(projected);
+            m_report.rank_map.largest_rank = modes.rebuild_modes;
         Band band;
         // Reused from band to band: fresh buffers of this size cost the kernel's page
         // zeroing every band (7.5 % of a 1080p run's time).
-        std::vector<float> rebuilt, sigma, kept_noise, ranks, coefficients;
+        std::vector<float> sigma, ranks;
         for (int row = 0; row < m_shape.height; row += plan.band_rows) {
             int end = std::min(m_shape.height, row + plan.band_rows);
             Band& data = band_with_halo(band, row, end);
             throw_if_cancelled();
-            lowrank::BandView noisy = data.view(frames).view();
-
-            coefficients.resize(static_cast<size_t>(data.rows) * projected);  // every value written below
-            lowrank::MutableBandView coefficient_view{coefficients.data(), data.rows, projected, data.rows};
-            lowrank::project_coefficients(noisy, temporal_projected, coefficient_view);
-            const size_t band_samples = static_cast<size_t>(data.rows) * frames;
-            rebuilt.resize(band_samples);
-            lowrank::MutableBandView rebuilt_view{rebuilt.data(), data.rows, frames, data.rows};
-            // The unfiltered rebuild of the whole band: sigma reads its residual.
-            lowrank::rebuild_from_coefficients({coefficients.data(), data.rows, rank, data.rows}, temporal_rank,
-                                               rebuilt_view);
-            // Sigma only for the band's own rows, laid out like the rebuilt band.
-            std::int64_t offset = (row - data.row_begin) * row_samples;
-            sigma.assign(band_samples, 0.0f);
-            lowrank::MutableBandView sigma_view{sigma.data() + offset, (end - row) * row_samples, frames, data.rows};
+            prepare_band(data, row, end, modes, nullptr, rank_map ? &ranks : nullptr);
+            const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
             lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
-            lowrank::BandView kept_noise_view{};
-            if (filter) {
-                filter_band(coefficients, data, temporal, rebuild_modes, row, end, kept_noise,
-                            rank_map ? &ranks : nullptr);
-                kept_noise_view = {kept_noise.data(), sigma_view.rows, frames, sigma_view.rows};
-            }
-            lowrank::confidence_band(noisy, rebuilt_view.view(), shape, leverages, rank, row - data.row_begin,
-                                     end - data.row_begin, confidence, sigma_view, filter ? &kept_noise_view : nullptr);
-            for (size_t j = 0; j < m_report.shrinkage.size(); ++j)  // --shrink optimal, the band's own rows
-                for (std::int64_t i = 0; i < sigma_view.rows; ++i)
-                    coefficients[j * data.rows + offset + i] *= static_cast<float>(m_report.shrinkage[j]);
-            if (filter || m_settings.optimal_shrinkage)  // the band's own rows from the changed coefficients
-                lowrank::rebuild_from_coefficients(
-                    {coefficients.data() + offset, sigma_view.rows, filter ? rebuild_modes : rank, data.rows}, temporal,
-                    {rebuilt.data() + offset, sigma_view.rows, frames, data.rows});
-            m_report.non_negative += make_non_negative({rebuilt.data() + offset, sigma_view.rows, frames, data.rows},
-                                                       m_settings.non_negative, m_settings.non_negative_floor);
+            // Sigma of the band's own rows, frame by frame as a write task does it.
+            sigma.resize(static_cast<size_t>(valid) * frames);
+            tbb::parallel_for(0, frames, [&](int t) {
+                std::vector<float> kept_noise;
+                if (filter) {
+                    kept_noise.resize(static_cast<size_t>(valid));
+                    kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes, m_gains.data(), valid,
+                                        kept_noise.data());
+                }
+                lowrank::frame_sigma(data.data + t * data.stride, m_rebuilt.data() + t * data.rows, shape,
+                                     row - data.row_begin, end - data.row_begin, m_confidence,
+                                     m_noise_variance.data(), modes.leverages(t), filter ? kept_noise.data() : nullptr,
+                                     sigma.data() + t * valid);
+            });
+            lowrank::MutableBandView output_view{m_rebuilt.data() + offset, valid, frames, data.rows};
+            if (output > 0)  // the band's own rows from the changed coefficients
+                lowrank::rebuild_from_coefficients({m_coefficients.data() + offset, valid, output, data.rows},
+                                                   modes.temporal.leftCols(output), output_view);
+            m_report.non_negative +=
+                make_non_negative(output_view, m_settings.non_negative, m_settings.non_negative_floor);
 
             tbb::parallel_for(0, frames, [&](int frame) {
-                m_sink.write_rows(frame, row, end, rebuilt.data() + frame * data.rows + offset,
-                                  sigma.data() + frame * data.rows + offset);
+                m_sink.write_rows(frame, row, end, m_rebuilt.data() + frame * data.rows + offset,
+                                  sigma.data() + frame * valid);
             });
             if (m_sink.wants_modes())
-                write_modes(coefficients, data, basis, rank, row, end, offset);
+                write_modes(m_coefficients, data, basis, rank, row, end, offset);
             if (rank_map) {
                 m_sink.write_rank_rows(row, end, ranks.data());
                 m_report.rank_map.add(ranks);
@@ -623,6 +714,117 @@ private:
         }
         if (rank_map)
             m_report.rank_map.finish();
+        m_progress.end();
+    }
+
+    // --stage modes: pass 2 over the task's rows up to the frames (stage_task.h):
+    // each band read with its halo, its cleaned values that differ from the files
+    // kept as patches, and prepare_band's results of the band's own rows kept.
+    void modes_stage(const RebuildBasis& modes)
+    {
+        StageTask& task = *m_settings.stage;
+        const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
+        const std::int64_t samples = row_samples * (task.row_end - task.row_begin);
+        const std::int64_t pixels = samples / m_shape.channels;
+        ModesBand result;
+        result.row_begin = task.row_begin;
+        result.row_end = task.row_end;
+        result.residual_modes = modes.rank;
+        result.output_modes = output_modes(modes);
+        result.gain_modes = m_settings.mode_filter.enabled ? modes.rebuild_modes : 0;
+        result.residual.resize(static_cast<size_t>(samples) * result.residual_modes);
+        result.output.resize(static_cast<size_t>(samples) * result.output_modes);
+        result.noise_variance.resize(static_cast<size_t>(samples));
+        result.gains.resize(static_cast<size_t>(pixels) * result.gain_modes);
+        ++m_report.passes;
+        m_progress.begin(fmt::format("modes of rows {}-{}: reading {} frames", task.row_begin, task.row_end - 1,
+                                     m_shape.frames),
+                         task.row_end - task.row_begin);
+        Band band;
+        std::vector<float> residual;
+        for (int row = task.row_begin; row < task.row_end; row += m_report.plan.band_rows) {
+            const int end = std::min(task.row_end, row + m_report.plan.band_rows);
+            const int halo = m_report.plan.halo_rows;
+            m_patches = {row, end, task.row_begin, &result.patches};
+            read_band(band, std::max(0, row - halo), std::min(m_shape.height, end + halo), nullptr);
+            m_patches = {};
+            prepare_band(band, row, end, modes, &residual, nullptr);
+            // Copy the band's own rows into the task's images, mode by mode.
+            const std::int64_t valid = (end - row) * row_samples, first = (row - task.row_begin) * row_samples;
+            const std::int64_t offset = (row - band.row_begin) * row_samples;
+            for (int j = 0; j < result.residual_modes; ++j)
+                std::copy_n(residual.begin() + j * valid, valid, result.residual.begin() + j * samples + first);
+            for (int j = 0; j < result.output_modes; ++j)
+                std::copy_n(m_coefficients.begin() + j * band.rows + offset, valid,
+                            result.output.begin() + j * samples + first);
+            std::copy_n(m_noise_variance.begin(), valid, result.noise_variance.begin() + first);
+            const std::int64_t valid_pixels = valid / m_shape.channels, first_pixel = first / m_shape.channels;
+            for (int j = 0; j < result.gain_modes; ++j)
+                std::copy_n(m_gains.begin() + j * valid_pixels, valid_pixels,
+                            result.gains.begin() + j * pixels + first_pixel);
+            m_progress.advance(end - row);
+        }
+        m_progress.end();
+        task.modes.clear();
+        task.modes.push_back(std::move(result));
+    }
+
+    // --stage write: the outputs of the frames the sink writes, each read alone and
+    // rebuilt from the modes tasks' images (stage_task.h) with the arithmetic of a
+    // whole run's pass 2, so the bits agree.
+    void write_stage(const RebuildBasis& modes)
+    {
+        StageTask& task = *m_settings.stage;
+        const ShotModes shot = join_modes_bands(task.modes, m_shape, modes.rank, output_modes(modes),
+                                                m_settings.mode_filter.enabled ? modes.rebuild_modes : 0);
+        task.modes.clear();
+        std::vector<int> written;
+        for (int t = 0; t < m_shape.frames; ++t)
+            if (m_sink.writes_frame(t))
+                written.push_back(t);
+        const std::int64_t samples = static_cast<std::int64_t>(m_shape.width) * m_shape.height * m_shape.channels;
+        const lowrank::ImageBandShape shape{m_shape.width, m_shape.height, m_shape.channels};
+        const Eigen::MatrixXd output_temporal = modes.temporal.leftCols(std::max(shot.output_modes, 1));
+        ++m_report.passes;
+        m_sink.begin({modes.rank, m_report.rank.rule, m_report.solver});
+        m_progress.begin(fmt::format("writing {} of {} frames", written.size(), m_shape.frames),
+                         static_cast<std::int64_t>(written.size()));
+        struct Buffers {
+            std::vector<float> noisy, unfiltered, kept_noise, sigma, output;
+        };
+        tbb::enumerable_thread_specific<Buffers> thread_buffers;
+        std::mutex counts_mutex;
+        tbb::parallel_for(0, static_cast<int>(written.size()), [&](int k) {
+            throw_if_cancelled();
+            const int t = written[static_cast<size_t>(k)];
+            Buffers& buffers = thread_buffers.local();
+            for (std::vector<float>* buffer :
+                 {&buffers.noisy, &buffers.unfiltered, &buffers.kept_noise, &buffers.sigma, &buffers.output})
+                buffer->resize(static_cast<size_t>(samples));
+            m_source.read_rows(t, 0, m_shape.height, buffers.noisy.data());
+            for (const ModesBand::Patch& patch : shot.patches[static_cast<size_t>(t)])
+                buffers.noisy[static_cast<size_t>(patch.sample)] = patch.value;
+            lowrank::rebuild_from_coefficients({shot.residual.data(), samples, shot.residual_modes, samples},
+                                               modes.temporal_rank.row(t), {buffers.unfiltered.data(), samples, 1, samples});
+            if (shot.gain_modes > 0)
+                kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
+                                    buffers.kept_noise.data());
+            lowrank::frame_sigma(buffers.noisy.data(), buffers.unfiltered.data(), shape, 0, m_shape.height,
+                                 m_confidence, shot.noise_variance.data(), modes.leverages(t),
+                                 shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, buffers.sigma.data());
+            std::vector<float>& output = shot.output_modes > 0 ? buffers.output : buffers.unfiltered;
+            if (shot.output_modes > 0)
+                lowrank::rebuild_from_coefficients({shot.output.data(), samples, shot.output_modes, samples},
+                                                   output_temporal.row(t), {output.data(), samples, 1, samples});
+            const NonNegativeCounts counts = make_non_negative({output.data(), samples, 1, samples},
+                                                               m_settings.non_negative, m_settings.non_negative_floor);
+            {
+                std::lock_guard<std::mutex> lock(counts_mutex);
+                m_report.non_negative += counts;
+            }
+            m_sink.write_rows(t, 0, m_shape.height, output.data(), buffers.sigma.data());
+            m_progress.advance(1);
+        });
         m_progress.end();
     }
 
@@ -652,6 +854,18 @@ private:
     double m_solve_seconds = 0;
     int m_filter_modes = 0;  // modes the mode filter surveyed
     std::vector<float> m_filtered;  // filter_band's output, reused from band to band
+    // prepare_band's results for the current band, reused from band to band:
+    std::vector<float> m_coefficients;    // [mode][sample] of the band with its halo
+    std::vector<float> m_rebuilt;         // [frame][sample]: the unfiltered rebuild, then the output rows
+    std::vector<float> m_noise_variance;  // sigma's s² of the valid rows
+    std::vector<float> m_gains;           // the mode filter's kept-noise gain per valid pixel and mode
+    lowrank::ConfidenceOptions m_confidence;
+    // --stage modes: read_band records the cleaned values of rows [row_begin, row_end)
+    // that differ from the files, samples counted from first_row.
+    struct PatchRows {
+        int row_begin = 0, row_end = 0, first_row = 0;
+        std::vector<ModesBand::Patch>* patches = nullptr;
+    } m_patches;
     ModeFilterOptions m_filter_options;       // the settings' with the feature channels found
     std::optional<FeatureGuide> m_features;  // the mode filter's feature guide
     std::optional<TrainingGram> m_training;  // --train-frames

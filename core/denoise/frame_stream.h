@@ -101,6 +101,13 @@ public:
     }
     /// Whether write_mode_rows should be called.
     virtual bool wants_modes() const { return false; }
+    /// Whether frame `frame_index` is written at all: a farm write task rebuilds
+    /// only those frames (a whole run rebuilds every frame).
+    virtual bool writes_frame(int frame_index) const
+    {
+        (void)frame_index;
+        return true;
+    }
     /// Rows of the per-pixel rank map (rank_map.h), one value per pixel. Only called
     /// when the run makes a rank map.
     virtual void write_rank_rows(int row_begin, int row_end, const float* ranks)
@@ -123,6 +130,7 @@ public:
         m_inner.write_mode_rows(row_begin, row_end, modes, spatial_modes);
     }
     bool wants_modes() const override { return m_inner.wants_modes(); }
+    bool writes_frame(int frame_index) const override { return m_inner.writes_frame(frame_index); }
     void write_rank_rows(int row_begin, int row_end, const float* ranks) override
     {
         m_inner.write_rank_rows(row_begin, row_end, ranks);

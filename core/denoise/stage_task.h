@@ -5,8 +5,14 @@
 //   Solve:      every block's sums, merged in block order (the order one run
 //               merges them in, so the bits are the same) → the modes, N and,
 //               with the mode filter, its survey pass over the whole shot;
-//   Write:      what Solve found → pass 2 (the outputs; the app writes only the
-//               frames the task owns).
+//   Modes:      what Solve found → pass 2 over a range of rows, up to the
+//               frames: the coefficient images (the spatial modes scaled by
+//               σ, unfiltered for sigma's residual and as the outputs are
+//               rebuilt from them), sigma's noise level per sample, the noise
+//               each filtered mode keeps per pixel, and the cleaned input values
+//               that differ from the files (NaN/Inf, fireflies);
+//   Write:      what Solve found and every band's modes → the outputs of the
+//               frames the task owns, reading only those frames.
 // The task holds the inputs and receives the outputs; app/stage_files.h moves
 // them between machines. Settings::stage null is a whole run.
 #pragma once
@@ -14,6 +20,7 @@
 #include "core/lowrank/gram.h"
 #include "core/lowrank/outliers.h"
 
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -24,9 +31,9 @@ namespace modestack::denoise {
 /// start on a block boundary.
 inline constexpr int kStageBlockRows = 64;
 
-enum class Stage { Statistics, Solve, Write };
+enum class Stage { Statistics, Solve, Modes, Write };
 
-/// "stats", "solve", "write".
+/// "stats", "solve", "modes", "write".
 const char* stage_name(Stage stage);
 
 /// Blocks of kStageBlockRows rows in `rows` image rows (the last one may be short).
@@ -36,9 +43,32 @@ inline int stage_blocks(int rows) { return (rows + kStageBlockRows - 1) / kStage
 /// rows are whole blocks: what a statistics task may cover.
 void check_statistics_rows(int row_begin, int row_end, int height);
 
+/// A modes task's result for rows [row_begin, row_end) of the shot: everything a
+/// write task needs of those rows besides the frames it writes. Samples are
+/// [row][x][channel] from the band's first row; images of several modes follow
+/// each other.
+struct ModesBand {
+    int row_begin = 0;
+    int row_end = 0;
+    int residual_modes = 0;  ///< N: unfiltered coefficients, for sigma's residual
+    int output_modes = 0;    ///< coefficients the outputs are rebuilt from (0: the residual ones)
+    int gain_modes = 0;      ///< per-pixel kept-noise gains (0: no mode filter)
+    std::vector<float> residual;        ///< residual_modes images
+    std::vector<float> output;          ///< output_modes images (filtered, shrunk)
+    std::vector<float> noise_variance;  ///< sigma's s² per sample (lowrank/confidence.h)
+    std::vector<float> gains;           ///< gain_modes images of one value per pixel
+    /// An input value that outlier cleaning changed: frame, sample in the band, value.
+    struct Patch {
+        int frame = 0;
+        std::int64_t sample = 0;
+        float value = 0;
+    };
+    std::vector<Patch> patches;  ///< in frame order, then sample order
+};
+
 struct StageTask {
     Stage stage = Stage::Statistics;
-    /// Statistics: rows [row_begin, row_end) (row_begin a multiple of kStageBlockRows).
+    /// Statistics: rows [row_begin, row_end) (row_begin a multiple of kStageBlockRows); Modes: any rows.
     int row_begin = 0;
     int row_end = 0;
     /// Statistics output: the sums of each block of its rows, in row order. Solve
@@ -48,9 +78,12 @@ struct StageTask {
     std::optional<lowrank::GramAccumulator> gram;
     /// Statistics output, Solve and Write input: what pass 1 cleaned.
     lowrank::OutlierCounts outliers;
-    /// Solve output, Write input: the mode filter's survey sums per image row
+    /// Solve output, Modes and Write input: the mode filter's survey sums per image row
     /// (SureSurvey::row_sums; empty without the mode filter).
     std::vector<std::vector<double>> survey_rows;
+    /// Modes: rows [row_begin, row_end) (any rows). Modes output: its one band.
+    /// Write input: every band of the shot, in row order, each row once.
+    std::vector<ModesBand> modes;
 };
 
 }  // namespace modestack::denoise

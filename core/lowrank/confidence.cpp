@@ -80,82 +80,150 @@ void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, 
 
 } // namespace
 
+namespace {
+
+// The residual r = x − x̂ of one frame over the rows the windows of the output
+// rows [valid_y0, valid_y1) read, and its windowed mean (`mean`, may be null) and
+// windowed high-pass power (`power`, may be null) at the output rows. The one
+// place both are computed: a whole run, a farm modes task (power only) and a
+// farm write task (mean only) agree bit for bit.
+class ResidualWindows {
+public:
+    ResidualWindows(const ImageBandShape& shape, int radius, int valid_y0, int valid_y1)
+        : m_shape(shape), m_radius(radius), m_valid_y0(valid_y0), m_valid_y1(valid_y1),
+          m_row_length(static_cast<std::int64_t>(shape.width) * shape.channels),
+          m_window_first(std::max(0, valid_y0 - radius)), m_window_last(std::min(shape.height - 1, valid_y1 - 1 + radius)),
+          m_column_sum(static_cast<std::size_t>(m_row_length))
+    {
+        // The windows read rows [window_first, window_last]; the high-pass one row more.
+        const int residual_first = std::max(0, m_window_first - 1);
+        const int residual_last = std::min(m_shape.height - 1, m_window_last + 1);
+        m_residual = {std::vector<double>(static_cast<std::size_t>((residual_last - residual_first + 1) * m_row_length)),
+                      residual_first, m_row_length};
+        m_power = {std::vector<double>(static_cast<std::size_t>((m_window_last - m_window_first + 1) * m_row_length)),
+                   m_window_first, m_row_length};
+    }
+
+    void compute(const float* noisy_frame, const float* rebuilt_frame, float* mean, float* power)
+    {
+        const std::int64_t first = m_residual.first_row * m_row_length;
+        for (std::size_t j = 0; j < m_residual.values.size(); ++j)
+            m_residual.values[j] = static_cast<double>(noisy_frame[first + j]) - rebuilt_frame[first + j];
+        if (mean)
+            windowed_mean(m_residual, m_shape, m_radius, m_valid_y0, m_valid_y1, mean, m_column_sum);
+        if (!power)
+            return;
+        for (int y = m_window_first; y <= m_window_last; ++y)
+            for (std::int64_t k = 0; k < m_row_length; ++k)
+                m_power.values[static_cast<std::size_t>((y - m_window_first) * m_row_length + k)] =
+                    high_pass_power(m_residual, m_shape, y, k);
+        windowed_mean(m_power, m_shape, m_radius, m_valid_y0, m_valid_y1, power, m_column_sum);
+    }
+
+private:
+    ImageBandShape m_shape;
+    int m_radius, m_valid_y0, m_valid_y1;
+    std::int64_t m_row_length;
+    int m_window_first, m_window_last;
+    std::vector<double> m_column_sum;
+    Rows m_residual, m_power;
+};
+
+void check_band(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape, int valid_y0,
+                int valid_y1, int radius)
+{
+    const std::int64_t band_rows = static_cast<std::int64_t>(shape.width) * shape.height * shape.channels;
+    if (noisy.rows != band_rows || rebuilt.rows != band_rows || rebuilt.frames != noisy.frames)
+        throw internal_error("confidence: band shapes do not match");
+    if (valid_y0 < 0 || valid_y1 > shape.height || valid_y0 > valid_y1)
+        throw internal_error("confidence: output rows outside the band");
+    if (radius < 0)
+        throw internal_error("confidence: negative window radius");
+}
+
+// Pixels in the window around output sample i (clipped at the band).
+double window_size(const ImageBandShape& shape, int radius, int valid_y0, std::int64_t i)
+{
+    const std::int64_t pixel = i / shape.channels;
+    const int x = static_cast<int>(pixel % shape.width);
+    const int y = valid_y0 + static_cast<int>(pixel / shape.width);
+    const int window_width = std::min(shape.width - 1, x + radius) - std::max(0, x - radius) + 1;
+    const int window_height = std::min(shape.height - 1, y + radius) - std::max(0, y - radius) + 1;
+    return static_cast<double>(window_width) * window_height;
+}
+
+} // namespace
+
+void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape, int rank,
+                             int valid_y0, int valid_y1, const ConfidenceOptions& options, float* noise_variance)
+{
+    check_band(noisy, rebuilt, shape, valid_y0, valid_y1, options.radius);
+    const int frames = noisy.frames;
+    if (rank < 0 || rank >= frames)
+        throw internal_error("confidence: rank must be less than the number of frames");
+    const std::int64_t samples = static_cast<std::int64_t>(shape.width) * shape.channels * (valid_y1 - valid_y0);
+    if (samples == 0)
+        return;
+    throw_if_cancelled();
+    // Per frame, the windowed high-pass power; then s² sums it over frames in frame order.
+    std::vector<float> noise_power(static_cast<std::size_t>(samples) * frames);
+    tbb::parallel_for(tbb::blocked_range<int>(0, frames, 1), [&](const tbb::blocked_range<int>& range) {
+        ResidualWindows windows(shape, options.radius, valid_y0, valid_y1);
+        for (int t = range.begin(); t != range.end(); ++t)
+            windows.compute(noisy.data + t * noisy.frame_stride, rebuilt.data + t * rebuilt.frame_stride, nullptr,
+                            noise_power.data() + t * samples);
+    });
+    const double degrees_of_freedom = frames - rank;
+    for_each_tile(samples, [&](std::int64_t row0, std::int64_t count) {
+        for (std::int64_t i = row0; i < row0 + count; ++i) {
+            double energy = 0;
+            for (int t = 0; t < frames; ++t)
+                energy += noise_power[static_cast<std::size_t>(t * samples + i)];
+            noise_variance[i] = static_cast<float>(energy / degrees_of_freedom);
+        }
+    });
+}
+
+void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape, int valid_y0,
+                 int valid_y1, const ConfidenceOptions& options, const float* noise_variance, double leverage,
+                 const float* kept_noise, float* sigma)
+{
+    if (valid_y0 < 0 || valid_y1 > shape.height || valid_y0 > valid_y1 || options.radius < 0)
+        throw internal_error("frame_sigma: output rows outside the band");
+    ResidualWindows windows(shape, options.radius, valid_y0, valid_y1);
+    windows.compute(noisy_frame, rebuilt_frame, sigma, nullptr);
+    const std::int64_t samples = static_cast<std::int64_t>(shape.width) * shape.channels * (valid_y1 - valid_y0);
+    for (std::int64_t i = 0; i < samples; ++i) {
+        // The windowed mean of pure noise has variance s²(1 − h_t)/|W|; what the
+        // squared mean holds beyond that is coherent missed content.
+        const double mean = sigma[i], variance = noise_variance[i];
+        const double bias = std::max(0.0, mean * mean - options.bias_significance * variance * (1.0 - leverage) /
+                                                            window_size(shape, options.radius, valid_y0, i));
+        const double kept = kept_noise ? static_cast<double>(kept_noise[i]) : leverage;
+        sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias));
+    }
+}
+
 void confidence_band(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
                      const Eigen::VectorXd& leverages, int rank, int valid_y0, int valid_y1,
                      const ConfidenceOptions& options, MutableBandView sigma, const BandView* kept_noise)
 {
     const int frames = noisy.frames;
-    const std::int64_t band_rows = static_cast<std::int64_t>(shape.width) * shape.height * shape.channels;
+    check_band(noisy, rebuilt, shape, valid_y0, valid_y1, options.radius);
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
-    if (noisy.rows != band_rows || rebuilt.rows != band_rows || rebuilt.frames != frames ||
-        sigma.frames != frames || leverages.size() != frames)
-        throw internal_error("confidence_band: band shapes do not match");
-    if (valid_y0 < 0 || valid_y1 > shape.height || valid_y0 > valid_y1 ||
-        sigma.rows != row_length * (valid_y1 - valid_y0))
+    if (sigma.frames != frames || leverages.size() != frames || sigma.rows != row_length * (valid_y1 - valid_y0))
         throw internal_error("confidence_band: output rows do not match the valid range");
-    if (rank < 0 || rank >= frames)
-        throw internal_error("confidence_band: rank must be less than the number of frames");
-    if (options.radius < 0)
-        throw internal_error("confidence_band: negative window radius");
     if (kept_noise && (kept_noise->rows != sigma.rows || kept_noise->frames != frames))
         throw internal_error("confidence_band: kept noise does not match sigma");
     if (sigma.rows == 0)
         return;
-
-    // Stage 1: per frame, the windowed mean residual (into sigma) and the windowed
-    // high-pass power (into noise_power), both per pixel and channel.
-    throw_if_cancelled();
-    std::vector<float> noise_power(static_cast<std::size_t>(sigma.rows) * frames);
-    // The windows read rows [window_first, window_last]; the high-pass one row more.
-    const int window_first = std::max(0, valid_y0 - options.radius);
-    const int window_last = std::min(shape.height - 1, valid_y1 - 1 + options.radius);
-    const int residual_first = std::max(0, window_first - 1), residual_last = std::min(shape.height - 1, window_last + 1);
-    tbb::parallel_for(tbb::blocked_range<int>(0, frames, 1), [&](const tbb::blocked_range<int>& range) {
-        std::vector<double> column_sum(static_cast<std::size_t>(row_length));
-        Rows residual{{}, residual_first, row_length}, power{{}, window_first, row_length};
-        residual.values.resize(static_cast<std::size_t>((residual_last - residual_first + 1) * row_length));
-        power.values.resize(static_cast<std::size_t>((window_last - window_first + 1) * row_length));
-        for (int t = range.begin(); t != range.end(); ++t) {
-            const float* noisy_frame = noisy.data + t * noisy.frame_stride;
-            const float* rebuilt_frame = rebuilt.data + t * rebuilt.frame_stride;
-            for (std::int64_t i = residual_first * row_length, j = 0; i < (residual_last + 1) * row_length; ++i, ++j)
-                residual.values[static_cast<std::size_t>(j)] = static_cast<double>(noisy_frame[i]) - rebuilt_frame[i];
-            for (int y = window_first; y <= window_last; ++y)
-                for (std::int64_t k = 0; k < row_length; ++k)
-                    power.values[static_cast<std::size_t>((y - window_first) * row_length + k)] =
-                        high_pass_power(residual, shape, y, k);
-            windowed_mean(residual, shape, options.radius, valid_y0, valid_y1, sigma.data + t * sigma.frame_stride,
-                          column_sum);
-            windowed_mean(power, shape, options.radius, valid_y0, valid_y1, noise_power.data() + t * sigma.rows,
-                          column_sum);
-        }
-    });
-
-    // Stage 2: s², bias and sigma per sample, summing over frames in frame order.
-    const double degrees_of_freedom = frames - rank;
-    const int radius = options.radius;
-    for_each_tile(sigma.rows, [&](std::int64_t row0, std::int64_t count) {
-        for (std::int64_t i = row0; i < row0 + count; ++i) {
-            const std::int64_t pixel = i / shape.channels;
-            const int x = static_cast<int>(pixel % shape.width);
-            const int y = valid_y0 + static_cast<int>(pixel / shape.width);
-            const int window_width = std::min(shape.width - 1, x + radius) - std::max(0, x - radius) + 1;
-            const int window_height = std::min(shape.height - 1, y + radius) - std::max(0, y - radius) + 1;
-            const double window_size = static_cast<double>(window_width) * window_height;
-            double energy = 0;
-            for (int t = 0; t < frames; ++t)
-                energy += noise_power[static_cast<std::size_t>(t * sigma.rows + i)];
-            const double noise_variance = energy / degrees_of_freedom;
-            for (int t = 0; t < frames; ++t) {
-                // The windowed mean of pure noise has variance s²(1 − h_t)/|W|;
-                // what the squared mean holds beyond that is coherent missed content.
-                const double mean = sigma.at(i, t);
-                const double bias =
-                    std::max(0.0, mean * mean - options.bias_significance * noise_variance * (1.0 - leverages(t)) / window_size);
-                const double kept = kept_noise ? kept_noise->at(i, t) : leverages(t);
-                sigma.at(i, t) = static_cast<float>(std::sqrt(noise_variance * kept + bias));
-            }
-        }
+    std::vector<float> noise_variance(static_cast<std::size_t>(sigma.rows));
+    residual_noise_variance(noisy, rebuilt, shape, rank, valid_y0, valid_y1, options, noise_variance.data());
+    tbb::parallel_for(0, frames, [&](int t) {
+        frame_sigma(noisy.data + t * noisy.frame_stride, rebuilt.data + t * rebuilt.frame_stride, shape, valid_y0,
+                    valid_y1, options, noise_variance.data(), leverages(t),
+                    kept_noise ? kept_noise->data + t * kept_noise->frame_stride : nullptr,
+                    sigma.data + t * sigma.frame_stride);
     });
 }
 

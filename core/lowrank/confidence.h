@@ -62,4 +62,18 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
                      const ConfidenceOptions& options, MutableBandView sigma,
                      const BandView* kept_noise = nullptr);
 
+/// The two halves of confidence_band, for a farm job whose tasks see all frames of
+/// some rows (modes task) or some frames of all rows (write task), giving the same
+/// bits as one call: s² of output rows [valid_y0, valid_y1) from every frame of
+/// the band (float per sample, laid out like one frame of `sigma`) ...
+void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape, int rank,
+                             int valid_y0, int valid_y1, const ConfidenceOptions& options, float* noise_variance);
+
+/// ... and sigma of one frame from its noisy and rebuilt values (whole band in
+/// `shape`), s² and the frame's leverage h_t, or its kept noise per sample
+/// (null: h_t). `sigma` receives the output rows.
+void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape, int valid_y0,
+                 int valid_y1, const ConfidenceOptions& options, const float* noise_variance, double leverage,
+                 const float* kept_noise, float* sigma);
+
 } // namespace modestack::lowrank

@@ -3,7 +3,9 @@
 #include "core/common/error.h"
 #include "core/lowrank/tiles.h"
 
+#include <algorithm>
 #include <string>
+#include <vector>
 
 namespace modestack::lowrank {
 namespace {
@@ -61,10 +63,23 @@ void rebuild_from_coefficients(const BandView& coefficients, const Eigen::Matrix
                  "rebuild_from_coefficients");
     if (temporal_n.cols() != coefficients.frames)
         throw internal_error("rebuild_from_coefficients: basis has the wrong number of modes");
+    // Each value is Σ_j c_j V_tj summed in mode order in double, whatever the tile
+    // and the frames asked for (no GEMM kernel whose order depends on the sizes):
+    // a farm write task rebuilding one frame gets the bits of a whole run.
     for_each_tile(coefficients.rows, [&](std::int64_t row0, std::int64_t count) {
-        Eigen::MatrixXd tile;
-        copy_tile(coefficients, row0, count, tile);
-        write_tile(tile * temporal_n.transpose(), row0, out);
+        std::vector<double> sum(static_cast<std::size_t>(count));
+        for (int t = 0; t < out.frames; ++t) {
+            std::fill(sum.begin(), sum.end(), 0.0);
+            for (int j = 0; j < coefficients.frames; ++j) {
+                const double weight = temporal_n(t, j);
+                const float* c = coefficients.data + j * coefficients.frame_stride + row0;
+                for (std::int64_t i = 0; i < count; ++i)
+                    sum[static_cast<std::size_t>(i)] += static_cast<double>(c[i]) * weight;
+            }
+            float* target = out.data + t * out.frame_stride + row0;
+            for (std::int64_t i = 0; i < count; ++i)
+                target[i] = static_cast<float>(sum[static_cast<std::size_t>(i)]);
+        }
     });
 }
 

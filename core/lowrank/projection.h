@@ -24,7 +24,8 @@ void project_coefficients(const BandView& in, const Eigen::MatrixXd& temporal_n,
                           MutableBandView coefficients);
 
 /// Rebuilds x̂ = V_N c for every row from its coefficients (layout of
-/// project_coefficients) into `out` (F frames).
+/// project_coefficients) into `out` (F frames). Each value is summed in mode
+/// order, so rebuilding some frames (rows of temporal_n) gives their bits of all.
 void rebuild_from_coefficients(const BandView& coefficients, const Eigen::MatrixXd& temporal_n,
                                MutableBandView out);
 

@@ -59,6 +59,7 @@ struct MemorySink : FrameSink {
     ShotShape size;
     std::vector<std::vector<float>> rebuilt, sigma;
     std::vector<int> next_row;
+    std::vector<bool> written;  ///< frames writes_frame() says yes to (empty: all)
     explicit MemorySink(const ShotShape& shape)
         : size(shape),
           rebuilt(shape.frames, std::vector<float>(std::size_t(shape.width) * shape.height * shape.channels)),
@@ -66,8 +67,10 @@ struct MemorySink : FrameSink {
           next_row(shape.frames, 0)
     {
     }
+    bool writes_frame(int frame) const override { return written.empty() || written[std::size_t(frame)]; }
     void write_rows(int frame, int row_begin, int row_end, const float* values, const float* errors) override
     {
+        CHECK(writes_frame(frame));
         CHECK(row_begin == next_row[frame]);
         next_row[frame] = row_end;
         std::size_t row = static_cast<std::size_t>(size.width) * size.channels;

@@ -1,7 +1,8 @@
 // The farm stages of the engine (stage_task.h): statistics tasks over bands of
-// rows, a solve task and write tasks give the same bits as one whole run, with
-// and without the mode filter and whitening, kept and streamed; bad row ranges
-// are refused.
+// rows, a solve task, modes tasks over other bands of rows and write tasks over
+// some frames each give the same bits as one whole run, with and without the
+// mode filter, whitening and shrinkage, kept and streamed; bad row ranges are
+// refused.
 #include "core/common/error.h"
 #include "core/denoise/engine.h"
 #include "core/denoise/whitening.h"
@@ -9,6 +10,7 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <utility>
@@ -74,9 +76,22 @@ Result run(MemoryShot& shot, Settings settings, StageTask* task)
     return result;
 }
 
-// stats over `bands` → solve → write, as a farm would, the task data passed on
-// as the files would pass it.
-Result run_staged(MemoryShot& shot, const Settings& settings, const std::vector<std::pair<int, int>>& bands)
+// A source that counts the frames read, to check that a write task reads only its own.
+struct CountingSource : ForwardingSource {
+    explicit CountingSource(FrameSource& inner) : ForwardingSource(inner) {}
+    std::vector<int> reads = std::vector<int>(64, 0);
+    void read_rows(int frame, int row_begin, int row_end, float* destination) override
+    {
+        ++reads[std::size_t(frame)];
+        ForwardingSource::read_rows(frame, row_begin, row_end, destination);
+    }
+};
+
+// stats over `bands` → solve → modes over `mode_bands` → write tasks over two
+// halves of the frames, as a farm would, the task data passed on as the files
+// would pass it. The result is the two write tasks' frames together.
+Result run_staged(MemoryShot& shot, const Settings& settings, const std::vector<std::pair<int, int>>& bands,
+                  const std::vector<std::pair<int, int>>& mode_bands = {{0, 37}, {37, 150}})
 {
     StageTask solve = task_of(Stage::Solve);
     for (auto [begin, end] : bands) {
@@ -91,13 +106,45 @@ Result run_staged(MemoryShot& shot, const Settings& settings, const std::vector<
     for (const auto& frame : solved.sink.rebuilt)
         for (float value : frame)
             REQUIRE(value == 0.0f);  // the solve task writes nothing
-    StageTask write = task_of(Stage::Write);
-    write.gram = solve.gram;
-    write.outliers = solve.outliers;
-    write.survey_rows = solve.survey_rows;
-    Result written = run(shot, settings, &write);
-    CHECK(written.report.rank.rank == solved.report.rank.rank);
-    return written;
+    std::vector<ModesBand> modes;
+    for (auto [begin, end] : mode_bands) {
+        StageTask task = task_of(Stage::Modes, begin, end);
+        task.gram = solve.gram;
+        task.outliers = solve.outliers;
+        task.survey_rows = solve.survey_rows;
+        Result result = run(shot, settings, &task);
+        REQUIRE(task.modes.size() == 1);
+        CHECK(task.modes.front().row_begin == begin);
+        modes.push_back(std::move(task.modes.front()));
+    }
+    std::sort(modes.begin(), modes.end(),
+              [](const ModesBand& a, const ModesBand& b) { return a.row_begin < b.row_begin; });
+    Result joined{{}, MemorySink(shot.size)};
+    const int frames = shot.size.frames, half = frames / 2;
+    for (auto [first, last] : {std::pair{0, half}, std::pair{half, frames}}) {
+        StageTask write = task_of(Stage::Write);
+        write.gram = solve.gram;
+        write.outliers = solve.outliers;
+        write.survey_rows = solve.survey_rows;
+        write.modes = modes;
+        Settings task_settings = settings;
+        task_settings.stage = &write;
+        MemorySink sink(shot.size);
+        sink.written.assign(std::size_t(frames), false);
+        std::fill(sink.written.begin() + first, sink.written.begin() + last, true);
+        CountingSource source(shot);
+        joined.report = run_denoise(source, sink, task_settings, Progress::silent());
+        CHECK(joined.report.rank.rank == solved.report.rank.rank);
+        for (int t = 0; t < frames; ++t) {
+            CAPTURE(t);
+            CHECK(source.reads[std::size_t(t)] == (t >= first && t < last ? 1 : 0));  // its own frames, once
+            if (t >= first && t < last) {
+                joined.sink.rebuilt[std::size_t(t)] = sink.rebuilt[std::size_t(t)];
+                joined.sink.sigma[std::size_t(t)] = sink.sigma[std::size_t(t)];
+            }
+        }
+    }
+    return joined;
 }
 
 // Returns whether the whole run kept the shot in memory.
@@ -137,6 +184,18 @@ TEST_CASE("stages: stats over bands, solve and write give the bits of one run, m
     CHECK(kept == std::vector<bool>{true, false, true, true});
 }
 
+TEST_CASE("stages: optimal shrinkage and clamped non-negative outputs, staged, give the bits of one run")
+{
+    MemoryShot shot = noisy_shot(false);
+    Settings settings;
+    settings.mode_filter.enabled = false;
+    settings.optimal_shrinkage = true;
+    settings.rank.rule = lowrank::RankRule::Fixed;
+    settings.rank.fixed_rank = 4;
+    settings.non_negative = NonNegativeMode::Clamp;
+    check_same_bits(shot, settings);
+}
+
 TEST_CASE("stages: with whitening weights the staged run still gives the bits of one run")
 {
     MemoryShot shot = noisy_shot(true);
@@ -147,7 +206,7 @@ TEST_CASE("stages: with whitening weights the staged run still gives the bits of
     check_same_bits(shot, settings);
 }
 
-TEST_CASE("stages: a statistics task must cover whole blocks of rows, and rsvd is refused")
+TEST_CASE("stages: a statistics task must cover whole blocks of rows, a modes task rows of the shot, and rsvd and keep-sum are refused")
 {
     MemoryShot shot = noisy_shot(false);
     Settings settings;
@@ -158,6 +217,14 @@ TEST_CASE("stages: a statistics task must cover whole blocks of rows, and rsvd i
     StageTask last = task_of(Stage::Statistics, 128, 150);
     CHECK_NOTHROW(run(shot, settings, &last));
     CHECK(last.gram_blocks.size() == 1);
+    StageTask outside = task_of(Stage::Modes, 100, 151);
+    outside.gram = lowrank::GramAccumulator(shot.size.frames);
+    CHECK_THROWS_WITH_AS(run(shot, settings, &outside), doctest::Contains("rows 0-149"), Error);
+    settings.non_negative = NonNegativeMode::KeepSum;
+    StageTask keep_sum = task_of(Stage::Write);
+    keep_sum.gram = lowrank::GramAccumulator(shot.size.frames);
+    CHECK_THROWS_WITH_AS(run(shot, settings, &keep_sum), doctest::Contains("keep-sum"), Error);
+    settings.non_negative = NonNegativeMode::Off;
     settings.solver = Solver::RandomizedSvd;
     StageTask stats = task_of(Stage::Statistics, 0, 64);
     CHECK_THROWS_WITH_AS(run(shot, settings, &stats), doctest::Contains("--method rsvd"), Error);

@@ -1,14 +1,16 @@
-// End-to-end: `modestack denoise --stage stats|solve|write` as a farm job runs
-// it, one command per task, on a generated multi-layer sequence: the outputs
-// hold the same pixels, in every channel, as one `denoise` run; partial files
-// that are missing, duplicated, from another shot or made with other options
-// are refused with one line and nothing written.
+// End-to-end: `modestack denoise --stage stats|solve|modes|write` as a farm
+// job runs it, one command per task, on a generated multi-layer sequence: the
+// outputs hold the same pixels, in every channel, as one `denoise` run, and a
+// write task reads no frame but its own (the others are damaged on disk);
+// partial files that are missing, duplicated, from another shot or solve, or
+// made with other options are refused with one line and nothing written.
 #include "tests/tools/testkit.h"
 
 #include <doctest/doctest.h>
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
@@ -74,7 +76,7 @@ void check_same_pixels(const std::string& a, const std::string& b)
 }
 }  // namespace
 
-TEST_CASE("denoise --stage: stats, solve and write tasks give the pixels of one run")
+TEST_CASE("denoise --stage: stats, solve, modes and write tasks give the pixels of one run, write reading only its frames")
 {
     TempDir dir;
     testkit::write_sequence(dir.file("in.%04d.exr"), frames(1, kFrames), layout(), noisy_value);
@@ -89,13 +91,39 @@ TEST_CASE("denoise --stage: stats, solve and write tasks give the pixels of one 
         run_ok(in + method + "--stage stats --rows 128-149 -o " + job.file("s3.stats"));
         run_ok(in + method + "--stage solve --stats " + job.file("s3.stats") + " " + job.file("s1.stats") + " " +
                job.file("s2.stats") + " -o " + job.file("shot.solve") + " --json " + job.file("solve.json"));
-        run_ok(in + method + "--stage write --solve " + job.file("shot.solve") + " --frames 1/3 -o " +
-               job.file("farm/d.####.exr"));
-        run_ok(in + method + "--stage write --solve " + job.file("shot.solve") + " --frames 5-9 -o " +
-               job.file("farm/d.####.exr") + " --json " + job.file("write.json"));
+        // Modes tasks over other bands of rows than the statistics tasks.
+        run_ok(in + method + "--stage modes --solve " + job.file("shot.solve") + " --rows 0-40 -o " +
+               job.file("m1.modes"));
+        run_ok(in + method + "--stage modes --solve " + job.file("shot.solve") + " --rows 2/2 -o " +
+               job.file("m2.modes") + " --json " + job.file("modes.json"));
+        run_ok(in + method + "--stage modes --solve " + job.file("shot.solve") + " --rows 41-74 -o " +
+               job.file("m3.modes"));
+        const std::string write_all = in + method + "--stage write --solve " + job.file("shot.solve") + " --modes " +
+                                  job.file("m2.modes") + " " + job.file("m1.modes") + " " + job.file("m3.modes");
+        run_ok(write_all + " --frames 1/3 -o " + job.file("farm/d.####.exr"));
+        // Frames 5-9 from a copy of the input whose other frames are damaged: a
+        // write task that read one of them would fail.
+        const std::string partial = job.file("partial");
+        std::filesystem::create_directories(partial);
+        for (int frame = 1; frame <= kFrames; ++frame) {
+            char name[32];
+            std::snprintf(name, sizeof name, "/in.%04d.exr", frame);
+            std::filesystem::copy_file(dir.file("") + name, partial + name);
+            if (frame >= 5 && frame <= 9)
+                continue;
+            const auto size = std::filesystem::file_size(partial + name);
+            std::fstream file(partial + name, std::ios::in | std::ios::out | std::ios::binary);
+            file.seekp(static_cast<std::streamoff>(size / 2));
+            file << std::string(size - size / 2, '\x5a');  // the pixel chunks at the end, same size
+        }
+        const std::string write_partial = "denoise " + partial + "/in.####.exr --layer DiffInd -q " + method +
+                                          "--stage write --solve " + job.file("shot.solve") + " --modes " +
+                                          job.file("m1.modes") + " " + job.file("m2.modes") + " " +
+                                          job.file("m3.modes");
+        run_ok(write_partial + " --frames 5-9 -o " + job.file("farm/d.####.exr") + " --json " + job.file("write.json"));
         CHECK(testkit::list_directory(job.file("farm")).size() == 9);
-        run_ok(in + method + "--stage write --solve " + job.file("shot.solve") + " --frames 10-12 -o " +
-               job.file("farm/d.####.exr"));
+        CHECK(run_modestack(write_partial + " --frames 10 -o " + job.file("bad/d.####.exr")).exit_code == 1);
+        run_ok(write_all + " --frames 10-12 -o " + job.file("farm/d.####.exr"));
         check_same_pixels(job.file("one"), job.file("farm"));
         auto solve = nlohmann::json::parse(read_text(job.file("solve.json")));
         CHECK(solve["farm"]["stage"] == "solve");
@@ -103,6 +131,9 @@ TEST_CASE("denoise --stage: stats, solve and write tasks give the pixels of one 
         auto write = nlohmann::json::parse(read_text(job.file("write.json")));
         CHECK(write["frames_written"] == 5);
         CHECK(write["rank"]["n"] == solve["rank"]["n"]);
+        CHECK(write["farm"]["modes_files"].size() == 3);
+        auto modes = nlohmann::json::parse(read_text(job.file("modes.json")));
+        CHECK(modes["farm"]["rows"] == nlohmann::json::array({75, 149}));
     }
 }
 
@@ -117,6 +148,19 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
     run_ok(in + "--stage stats --rows 2/2 -o " + dir.file("a2.stats"));
     run_ok(in + "--stage stats --rows 1/3 -o " + dir.file("b1.stats"));
     run_ok(in + "--rank 3 --stage stats --rows 2/2 -o " + dir.file("rank3.stats"));
+    run_ok(in + "--stage solve --stats " + dir.file("a1.stats") + " " + dir.file("a2.stats") + " -o " +
+           dir.file("shot.solve"));
+    {  // another solve of this shot: its last number changed
+        std::filesystem::copy_file(dir.file("shot.solve"), dir.file("changed.solve"));
+        std::fstream file(dir.file("changed.solve"), std::ios::in | std::ios::out | std::ios::binary);
+        file.seekp(-1, std::ios::end);
+        file.put('\x41');
+    }
+    run_ok(in + "--rank 2 --stage stats --rows 1/1 -o " + dir.file("rank2.stats"));
+    run_ok(in + "--rank 2 --stage solve --stats " + dir.file("rank2.stats") + " -o " + dir.file("rank2.solve"));
+    run_ok(in + "--stage modes --solve " + dir.file("shot.solve") + " --rows 1/2 -o " + dir.file("m1.modes"));
+    run_ok(in + "--stage modes --solve " + dir.file("shot.solve") + " --rows 2/2 -o " + dir.file("m2.modes"));
+    run_ok(in + "--stage modes --solve " + dir.file("shot.solve") + " --rows 0-99 -o " + dir.file("m0-99.modes"));
     run_ok("denoise " + dir.file("other.####.exr") + " --layer DiffInd -q --stage stats --rows 2/2 -o " +
            dir.file("other.stats"));
     run_ok("denoise " + dir.file("in.####.exr") + " --frames 1-11 --layer DiffInd -q --stage stats --rows 2/2 -o " +
@@ -139,13 +183,41 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
          "rank3.stats: was made with other options: --rank"},
         {solve + dir.file("a1.stats") + " " + dir.file("junk.stats"), 1, "junk.stats: not a modestack stage file"},
         {solve + dir.file("a1.stats") + " " + dir.file("missing.stats"), 1, "missing.stats: cannot open"},
-        {in + "--stage write --solve " + dir.file("a1.stats") + " -o " + dir.file("out/d.####.exr"), 1,
+        {in + "--stage write --solve " + dir.file("a1.stats") + " --modes " + dir.file("m1.modes") + " -o " +
+             dir.file("out/d.####.exr"),
+         1, "a1.stats: is the output of --stage stats, not of --stage solve"},
+        {in + "--stage modes --solve " + dir.file("a1.stats") + " --rows 1/2 -o " + dir.file("out/x.modes"), 1,
          "a1.stats: is the output of --stage stats, not of --stage solve"},
+        {in + "--stage write --solve " + dir.file("shot.solve") + " --modes " + dir.file("m1.modes") + " -o " +
+             dir.file("out/d.####.exr"),
+         1, "m1.modes: rows 75-149 are in no modes file given"},
+        {in + "--stage write --solve " + dir.file("shot.solve") + " --modes " + dir.file("m1.modes") + " " +
+             dir.file("m0-99.modes") + " " + dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
+         1, "are also in"},
+        {in + "--rank 2 --stage write --solve " + dir.file("rank2.solve") + " --modes " + dir.file("m1.modes") + " " +
+             dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
+         1, "was made with other options: --rank"},
+        {in + "--stage write --solve " + dir.file("shot.solve") + " --modes " + dir.file("m1.modes") + " " +
+             dir.file("a2.stats") + " -o " + dir.file("out/d.####.exr"),
+         1, "a2.stats: is the output of --stage stats, not of --stage modes"},
+        {in + "--stage write --solve " + dir.file("changed.solve") + " --modes " + dir.file("m1.modes") + " " +
+             dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
+         1, "m1.modes: was made from another solve file than"},
+        {in + "--stage write --solve " + dir.file("shot.solve") + " -o " + dir.file("out/d.####.exr"), 2,
+         "--stage write needs the modes files"},
+        {in + "--stage modes --solve " + dir.file("shot.solve") + " -o " + dir.file("out/x.modes"), 2,
+         "--stage modes needs --rows"},
+        {in + "--stage modes --solve " + dir.file("shot.solve") + " --rows 100-150 -o " + dir.file("out/x.modes"), 2,
+         "the shot has rows 0-149"},
+        {in + "--stage stats --rows 1/2 --modes " + dir.file("m1.modes") + " -o " + dir.file("out/x.stats"), 2,
+         "--modes belongs to --stage write"},
+        {in + "--stage stats --rows 1/2 --non-negative --non-negative-mode keep-sum -o " + dir.file("out/x.stats"), 2,
+         "--non-negative-mode keep-sum"},
         {in + "--stage stats --rows 10-63 -o " + dir.file("out/x.stats"), 2, "whole blocks of 64 rows"},
         {in + "--stage stats --rows 4/3 -o " + dir.file("out/x.stats"), 2, "--rows 4/3"},
         {in + "--stage stats --rows 1/4 -o " + dir.file("out/x.stats"), 2, "fewer than 4 tasks"},
         {in + "--stage stats -o " + dir.file("out/x.stats"), 2, "--stage stats needs --rows"},
-        {in + "--stage solve --rows 1/2 -o " + dir.file("out/x.solve"), 2, "--rows belongs to --stage stats"},
+        {in + "--stage solve --rows 1/2 -o " + dir.file("out/x.solve"), 2, "--rows belongs to --stage stats or modes"},
         {in + "--stage stats --rows 1/2 --method rsvd -o " + dir.file("out/x.stats"), 2, "--method rsvd"},
         {in + "--stage merge -o " + dir.file("out/x.stats"), 2, "--stage 'merge'"},
         {in + "--stage stats --rows 1/2 --report r.html -o " + dir.file("out/x.stats"), 2,
@@ -161,8 +233,8 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
             CHECK(testkit::list_directory(dir.file("out")).empty());
     }
     // A write task's --frames must be frames of the solve file's shot.
-    run_ok(solve + dir.file("a1.stats") + " " + dir.file("a2.stats"));
-    auto outside = run_modestack(in + "--stage write --solve " + dir.file("out/shot.solve") + " --frames 10-14 -o " +
+    auto outside = run_modestack(in + "--stage write --solve " + dir.file("shot.solve") + " --modes " +
+                                 dir.file("m1.modes") + " " + dir.file("m2.modes") + " --frames 10-14 -o " +
                                  dir.file("w/d.####.exr"));
     CHECK(outside.exit_code == 2);
     CHECK_MESSAGE(outside.err.find("frame 13 is not in the shot") != std::string::npos, outside.err);
