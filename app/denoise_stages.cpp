@@ -16,11 +16,11 @@ namespace {
 
 denoise::Stage parse_stage(const std::string& name)
 {
-    for (denoise::Stage stage :
-         {denoise::Stage::Statistics, denoise::Stage::Solve, denoise::Stage::Modes, denoise::Stage::Write})
+    for (denoise::Stage stage : {denoise::Stage::Statistics, denoise::Stage::Solve, denoise::Stage::Survey,
+                                 denoise::Stage::Modes, denoise::Stage::Write})
         if (name == denoise::stage_name(stage))
             return stage;
-    throw usage_error(fmt::format("--stage '{}' is not one of stats, solve, modes, write", name));
+    throw usage_error(fmt::format("--stage '{}' is not one of stats, solve, survey, modes, write", name));
 }
 
 // "I/K" (1 ≤ I ≤ K): task I of K equal shares; false when `text` is not of that form.
@@ -49,7 +49,7 @@ std::pair<int, int> share_of(int items, int index, int count)
 nlohmann::ordered_json method_options_given(const CLI::App& command)
 {
     static const std::set<std::string> excluded{"SEQ",      "--output",  "--stage",        "--rows",
-                                                "--stats",  "--solve",   "--modes",        "--frames", "--json",
+                                                "--stats",  "--solve",   "--survey", "--modes", "--frames", "--json",
                                                 "--threads", "--quiet",  "--max-memory",   "--skip-existing",
                                                 "--report", "--save-modes", "--help"};
     nlohmann::ordered_json options = nlohmann::ordered_json::object();
@@ -76,15 +76,17 @@ nlohmann::ordered_json shot_json(const io::FrameSequence& input, const io::Seque
 void add_stage_options(CLI::App& command, StageOptions& options)
 {
     command.add_option("--stage", options.stage,
-                       "Run one farm task of the denoise (README, farm jobs): stats (-o the statistics of --rows), "
-                       "solve (-o the basis from every --stats file), modes (-o the mode images of --rows from "
-                       "--solve) or write (the outputs of --frames from --solve and every --modes file, reading "
-                       "only those frames); the outputs are byte-identical to one run with the same options");
+                       "Run one farm task of the denoise (README, farm jobs), in this order: stats (-o the "
+                       "statistics of --rows), solve (-o the temporal modes from every --stats file), survey (-o "
+                       "the mode filter's sums of --rows), modes (-o the mode images of --rows) and write (the "
+                       "outputs of --frames, reading only those frames); the outputs are byte-identical to one "
+                       "run with the same options");
     command.add_option("--rows", options.rows,
-                       "--stage stats and modes: the rows of this task, Y0-Y1 (inclusive; for stats Y0 a multiple "
-                       "of 64, Y1 + 1 too or the last row) or I/K (share I of K)");
+                       "--stage stats, survey and modes: the rows of this task, Y0-Y1 (inclusive; for stats Y0 a "
+                       "multiple of 64, Y1 + 1 too or the last row) or I/K (share I of K)");
     command.add_option("--stats", options.stats, "--stage solve: every statistics file of the shot, once");
-    command.add_option("--solve", options.solve, "--stage modes and write: the solve task's file");
+    command.add_option("--solve", options.solve, "--stage survey, modes and write: the solve task's file");
+    command.add_option("--survey", options.survey, "--stage modes and write: every survey file of the shot, once");
     command.add_option("--modes", options.modes, "--stage write: every modes file of the shot, once");
 }
 
@@ -92,14 +94,20 @@ StageRun::StageRun(const StageOptions& options, const CLI::App& command) : m_opt
 {
     m_task.stage = parse_stage(options.stage);
     const std::string name = denoise::stage_name(m_task.stage);
-    const bool by_rows = m_task.stage == denoise::Stage::Statistics || m_task.stage == denoise::Stage::Modes;
-    const bool after_solve = m_task.stage == denoise::Stage::Modes || m_task.stage == denoise::Stage::Write;
+    const denoise::Stage stage = m_task.stage;
+    const bool by_rows = stage == denoise::Stage::Statistics || stage == denoise::Stage::Survey ||
+                         stage == denoise::Stage::Modes;
+    const bool after_solve = stage == denoise::Stage::Survey || stage == denoise::Stage::Modes ||
+                             stage == denoise::Stage::Write;
+    const bool after_survey = stage == denoise::Stage::Modes || stage == denoise::Stage::Write;
     if (!options.rows.empty() && !by_rows)
-        throw usage_error(fmt::format("--rows belongs to --stage stats or modes, not --stage {}", name));
-    if (!options.stats.empty() && m_task.stage != denoise::Stage::Solve)
+        throw usage_error(fmt::format("--rows belongs to --stage stats, survey or modes, not --stage {}", name));
+    if (!options.stats.empty() && stage != denoise::Stage::Solve)
         throw usage_error(fmt::format("--stats belongs to --stage solve, not --stage {}", name));
     if (!options.solve.empty() && !after_solve)
-        throw usage_error(fmt::format("--solve belongs to --stage modes or write, not --stage {}", name));
+        throw usage_error(fmt::format("--solve belongs to --stage survey, modes or write, not --stage {}", name));
+    if (!options.survey.empty() && !after_survey)
+        throw usage_error(fmt::format("--survey belongs to --stage modes or write, not --stage {}", name));
     if (!options.modes.empty() && m_task.stage != denoise::Stage::Write)
         throw usage_error(fmt::format("--modes belongs to --stage write, not --stage {}", name));
     if (by_rows && options.rows.empty())
@@ -108,6 +116,8 @@ StageRun::StageRun(const StageOptions& options, const CLI::App& command) : m_opt
         throw usage_error("--stage solve needs the statistics files of the shot: --stats FILE...");
     if (after_solve && options.solve.empty() && !options.solve_bytes)
         throw usage_error(fmt::format("--stage {} needs the solve task's file: --solve FILE", name));
+    if (after_survey && options.survey.empty() && !options.survey_bytes)
+        throw usage_error(fmt::format("--stage {} needs the survey files of the shot: --survey FILE...", name));
     if (m_task.stage == denoise::Stage::Write && options.modes.empty() && !options.modes_bytes)
         throw usage_error("--stage write needs the modes files of the shot: --modes FILE...");
     for (const char* option : {"--report", "--save-modes", "--rank-map", "--segments", "--train-frames"})
@@ -125,6 +135,10 @@ StageRun::StageRun(const StageOptions& options, const CLI::App& command) : m_opt
         m_solve = *options.solve_bytes;
     else if (!options.solve.empty())
         m_solve = read_stage_bytes(options.solve);
+    if (options.survey_bytes)
+        m_surveys = *options.survey_bytes;
+    for (const std::string& path : options.survey)
+        m_surveys.push_back(read_stage_bytes(path));
     if (options.modes_bytes)
         m_modes = *options.modes_bytes;
     for (const std::string& path : options.modes)
@@ -164,7 +178,8 @@ void StageRun::prepare(const io::FrameSequence& input, const io::SequenceReader&
     const int height = reader.height(), frames = static_cast<int>(input.frames.size());
     const int blocks = denoise::stage_blocks(height);
     switch (m_task.stage) {
-    case denoise::Stage::Modes: {  // any rows: its images do not depend on the bands
+    case denoise::Stage::Survey:
+    case denoise::Stage::Modes: {  // any rows: their sums and images do not depend on the bands
         int index = 0, count = 0;
         std::smatch match;
         if (parse_share(m_options.rows, "--rows", index, count)) {
@@ -181,6 +196,8 @@ void StageRun::prepare(const io::FrameSequence& input, const io::SequenceReader&
             throw usage_error(fmt::format("--rows '{}': write Y0-Y1 or I/K", m_options.rows));
         }
         read_solve(m_solve, m_fingerprint, m_task);
+        if (m_task.stage == denoise::Stage::Modes)
+            read_surveys(m_surveys, m_solve, m_fingerprint, height, m_task);
         break;
     }
     case denoise::Stage::Statistics: {
@@ -211,7 +228,11 @@ void StageRun::prepare(const io::FrameSequence& input, const io::SequenceReader&
         break;
     case denoise::Stage::Write:
         read_solve(m_solve, m_fingerprint, m_task);
-        read_modes(m_modes, m_solve, m_fingerprint, reader.width(), height, reader.selected_channel_count(), m_task);
+        read_surveys(m_surveys, m_solve, m_fingerprint, height, m_task);
+        read_modes(m_modes, m_solve, survey_digest(m_task.survey_rows), m_fingerprint, reader.width(), height,
+                   reader.selected_channel_count(), m_task);
+        for (StageBytes& input : m_modes)  // parsed into the task: only the names stay, for the JSON
+            std::string().swap(input.bytes);
         break;
     }
 }
@@ -220,9 +241,13 @@ void StageRun::finish(const std::string& output_path) const
 {
     if (writes_frames())
         return;
-    std::string bytes = m_task.stage == denoise::Stage::Statistics ? statistics_bytes(m_fingerprint, m_task)
-                        : m_task.stage == denoise::Stage::Solve    ? solve_bytes(m_fingerprint, m_task)
-                                                                   : modes_bytes(m_fingerprint, m_solve, m_task);
+    std::string bytes;
+    switch (m_task.stage) {
+    case denoise::Stage::Statistics: bytes = statistics_bytes(m_fingerprint, m_task); break;
+    case denoise::Stage::Solve: bytes = solve_bytes(m_fingerprint, m_task); break;
+    case denoise::Stage::Survey: bytes = survey_bytes(m_fingerprint, m_solve, m_task); break;
+    default: bytes = modes_bytes(m_fingerprint, m_solve, survey_digest(m_task.survey_rows), m_task); break;
+    }
     if (m_options.output_bytes)
         *m_options.output_bytes = std::move(bytes);
     else
@@ -232,13 +257,17 @@ void StageRun::finish(const std::string& output_path) const
 nlohmann::ordered_json StageRun::json() const
 {
     nlohmann::ordered_json json{{"stage", denoise::stage_name(m_task.stage)}};
-    if (m_task.stage == denoise::Stage::Statistics || m_task.stage == denoise::Stage::Modes)
+    if (m_task.stage == denoise::Stage::Statistics || m_task.stage == denoise::Stage::Survey ||
+        m_task.stage == denoise::Stage::Modes)
         json["rows"] = {m_task.row_begin, m_task.row_end - 1};
     if (m_task.stage == denoise::Stage::Solve)
         for (const StageBytes& input : m_statistics)
             json["statistics_files"].push_back(input.name);
-    if (m_task.stage == denoise::Stage::Modes || m_task.stage == denoise::Stage::Write)
+    if (m_task.stage != denoise::Stage::Statistics && m_task.stage != denoise::Stage::Solve)
         json["solve_file"] = m_solve.name;
+    if (m_task.stage == denoise::Stage::Modes || m_task.stage == denoise::Stage::Write)
+        for (const StageBytes& input : m_surveys)
+            json["survey_files"].push_back(input.name);
     if (m_task.stage == denoise::Stage::Write)
         for (const StageBytes& input : m_modes)
             json["modes_files"].push_back(input.name);

@@ -137,10 +137,21 @@ int run_mpi_denoise(const std::string& frames, const RunStage& run_stage)
         }
         const StageBytes solve_file{"the solve of rank 0", mpi.broadcast(std::move(solved))};
 
+        StageOptions survey;
+        survey.stage = "survey";
+        survey.rows = share;
+        survey.solve_bytes = &solve_file;
+        std::string survey_sums;
+        survey.output_bytes = &survey_sums;
+        if (int code = run_stage(survey, frames, lead); code != 0)
+            mpi.abort("the survey stage failed", code);
+        const std::vector<StageBytes> all_surveys = mpi.all_gather(survey_sums, "survey");
+
         StageOptions modes;
         modes.stage = "modes";
         modes.rows = share;
         modes.solve_bytes = &solve_file;
+        modes.survey_bytes = &all_surveys;
         std::string mode_images;
         modes.output_bytes = &mode_images;
         if (int code = run_stage(modes, frames, lead); code != 0)
@@ -150,6 +161,7 @@ int run_mpi_denoise(const std::string& frames, const RunStage& run_stage)
         StageOptions write;
         write.stage = "write";
         write.solve_bytes = &solve_file;
+        write.survey_bytes = &all_surveys;
         write.modes_bytes = &all_modes;
         return run_stage(write, share, lead);
     } catch (const Error& error) {

@@ -3,9 +3,10 @@
 // over MPI instead of shared storage. Rank r computes the statistics of share
 // r + 1 of K of the rows; rank 0 gathers them in rank order (= row order, so
 // the merge is the one a single run does), solves and broadcasts the solve
-// file; rank r computes the mode images of share r + 1 of K of the rows, every
-// rank gathers all of them (the N spatial modes shared), and rank r then writes
-// share r + 1 of K of the frames, reading only those. The outputs are
+// file; rank r runs the mode filter's survey and then computes the mode images
+// of share r + 1 of K of the rows, every rank gathering all ranks' results (the
+// N spatial modes shared), and rank r then writes share r + 1 of K of the
+// frames, reading only those. The outputs are
 // the bits of one run. A rank that fails prints its error and aborts the job
 // (MPI_Abort) with its exit code, so that no rank waits for it forever.
 #pragma once
@@ -25,7 +26,7 @@ bool started_by_mpirun();
 /// (progress, summary line, --json). Returns the exit code.
 using RunStage = std::function<int(const StageOptions& stage, const std::string& frames, bool lead)>;
 
-/// Runs the job's four stages on this rank; `frames` is the command's --frames.
+/// Runs the job's five stages on this rank; `frames` is the command's --frames.
 int run_mpi_denoise(const std::string& frames, const RunStage& run_stage);
 
 }  // namespace modestack::app

@@ -318,16 +318,8 @@ std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::Stage
     nlohmann::ordered_json header = header_for(denoise::Stage::Solve, fingerprint, task.gram->frames());
     header["gram"] = {{"rows", state.rows}, {"tiles", state.tiles}};
     header["outliers"] = outliers_json(task.outliers);
-    header["survey_rows"] = task.survey_rows.size();
-    header["survey_row_length"] = task.survey_rows.empty() ? 0 : task.survey_rows.front().size();
     Payload payload;
     payload.add_gram(*task.gram);
-    for (const std::vector<double>& row : task.survey_rows) {
-        if (row.size() != task.survey_rows.front().size())
-            throw internal_error("solve_bytes: survey rows of different lengths");
-        for (double value : row)
-            payload.add(value);
-    }
     return stage_bytes(header, payload);
 }
 
@@ -337,31 +329,27 @@ void read_solve(const StageBytes& solve, const ShotFingerprint& fingerprint, den
     StageFile file = parse_stage_file(path, solve.bytes, denoise::Stage::Solve, fingerprint);
     try {
         const int frames = file.header.at("frames").get<int>();
-        const std::size_t rows = file.header.at("survey_rows").get<std::size_t>();
-        const std::size_t length = file.header.at("survey_row_length").get<std::size_t>();
-        if (frames < 1 || file.header.at("doubles").get<std::size_t>() != gram_doubles(frames) + rows * length)
+        if (frames < 1 || file.header.at("doubles").get<std::size_t>() != gram_doubles(frames))
             throw bad_input(path, "damaged solve file: its sizes do not agree");
         PayloadReader payload = file.payload();
         task.gram = payload.gram(frames, file.header.at("gram").at("rows").get<std::int64_t>(),
                                  file.header.at("gram").at("tiles").get<std::int64_t>());
         task.outliers.non_finite = file.header.at("outliers").at("non_finite").get<std::int64_t>();
         task.outliers.fireflies = file.header.at("outliers").at("fireflies").get<std::int64_t>();
-        task.survey_rows.assign(rows, std::vector<double>(length));
-        for (std::vector<double>& row : task.survey_rows)
-            for (double& value : row)
-                value = payload.next();
     } catch (const nlohmann::json::exception& error) {
         throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
     }
 }
 
-std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const denoise::StageTask& task)
+std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const std::string& surveys,
+                        const denoise::StageTask& task)
 {
     if (task.modes.size() != 1)
         throw internal_error("modes_bytes: a modes task has one band");
     const denoise::ModesBand& band = task.modes.front();
     nlohmann::ordered_json header = header_for(denoise::Stage::Modes, fingerprint, 0);
     header["solve"] = solve_digest(solve);
+    header["surveys"] = surveys;
     header["rows"] = {band.row_begin, band.row_end};
     header["residual_modes"] = band.residual_modes;
     header["output_modes"] = band.output_modes;
@@ -378,8 +366,8 @@ std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& so
     return stage_bytes(header, payload);
 }
 
-void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, const ShotFingerprint& fingerprint,
-                int width, int height, int channels, denoise::StageTask& task)
+void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, const std::string& surveys,
+                const ShotFingerprint& fingerprint, int width, int height, int channels, denoise::StageTask& task)
 {
     if (inputs.empty())
         throw usage_error("--stage write needs the modes files of the shot: --modes FILE...");
@@ -393,6 +381,8 @@ void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, 
         try {
             if (header.at("solve").get<std::string>() != digest)
                 throw bad_input(path, fmt::format("was made from another solve file than {}", solve.name));
+            if (header.at("surveys").get<std::string>() != surveys)
+                throw bad_input(path, "was made from other survey sums than the survey files given");
             const int begin = header.at("rows").at(0).get<int>(), end = header.at("rows").at(1).get<int>();
             const std::size_t samples = static_cast<std::size_t>(width) * channels * std::max(0, end - begin);
             const std::size_t floats =
@@ -434,6 +424,74 @@ void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, 
             throw bad_input(file.path, "damaged modes file: its modes differ from the other files'");
         task.modes.push_back(std::move(band));
     }
+}
+
+std::string survey_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const denoise::StageTask& task)
+{
+    nlohmann::ordered_json header = header_for(denoise::Stage::Survey, fingerprint, 0);
+    header["solve"] = solve_digest(solve);
+    header["rows"] = {task.row_begin, task.row_end};
+    const std::size_t length = task.survey_rows.empty() ? 0 : task.survey_rows.front().size();
+    header["survey_row_length"] = length;
+    Payload payload;
+    for (const std::vector<double>& row : task.survey_rows) {
+        if (row.size() != length)
+            throw internal_error("survey_bytes: survey rows of different lengths");
+        for (double value : row)
+            payload.add(value);
+    }
+    return stage_bytes(header, payload);
+}
+
+void read_surveys(const std::vector<StageBytes>& inputs, const StageBytes& solve, const ShotFingerprint& fingerprint,
+                  int height, denoise::StageTask& task)
+{
+    if (inputs.empty())
+        throw usage_error("the modes and write stages need the survey files of the shot: --survey FILE...");
+    const std::string digest = solve_digest(solve);
+    std::vector<StageFile> files;
+    std::vector<RowBand> bands;
+    for (const StageBytes& input : inputs) {
+        const std::string& path = input.name;
+        files.push_back(parse_stage_file(path, input.bytes, denoise::Stage::Survey, fingerprint));
+        const nlohmann::json& header = files.back().header;
+        try {
+            if (header.at("solve").get<std::string>() != digest)
+                throw bad_input(path, fmt::format("was made from another solve file than {}", solve.name));
+            const int begin = header.at("rows").at(0).get<int>(), end = header.at("rows").at(1).get<int>();
+            const std::size_t length = header.at("survey_row_length").get<std::size_t>();
+            const std::size_t rows = length == 0 ? 0 : static_cast<std::size_t>(std::max(0, end - begin));
+            if (begin < 0 || end > height || begin >= end || header.at("doubles").get<std::size_t>() != rows * length ||
+                (!files.empty() && length != files.front().header.at("survey_row_length").get<std::size_t>()))
+                throw bad_input(path, "damaged survey file: its sizes do not fit the shot");
+            bands.push_back({begin, end, files.size() - 1});
+        } catch (const nlohmann::json::exception& error) {
+            throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
+        }
+    }
+    check_row_coverage(bands, files, height, "survey");
+    task.survey_rows.clear();
+    for (const RowBand& band : bands) {
+        const StageFile& file = files[band.file];
+        const std::size_t length = file.header.at("survey_row_length").get<std::size_t>();
+        if (length == 0)
+            continue;  // no mode filter: nothing was surveyed
+        PayloadReader payload = file.payload();
+        for (int row = band.begin; row < band.end; ++row) {
+            std::vector<double> sums(length);
+            for (double& value : sums)
+                value = payload.next();
+            task.survey_rows.push_back(std::move(sums));
+        }
+    }
+}
+
+std::string survey_digest(const std::vector<std::vector<double>>& rows)
+{
+    std::string all;
+    for (const std::vector<double>& row : rows)
+        all.append(reinterpret_cast<const char*>(row.data()), row.size() * sizeof(double));
+    return solve_digest({"", all});
 }
 
 }  // namespace modestack::app

@@ -1,6 +1,6 @@
 // The files a farm denoise passes between its tasks (`denoise --stage`, issue 11;
 // core/denoise/stage_task.h): a statistics task's block sums, the solve task's
-// merged sums and mode-filter survey, and a modes task's images of its rows.
+// merged sums, a survey task's mode-filter sums and a modes task's images of its rows.
 // Each file is one text line naming the format, one line of JSON (the stage,
 // the shot's fingerprint, sizes, counts) and the numbers as raw little-endian
 // doubles, then floats (a modes file's images), so that every bit survives the
@@ -55,16 +55,28 @@ void read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprin
 /// The solve task's output.
 std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::StageTask& task);
 
-/// Reads a solve file made for `fingerprint` into task.gram, task.outliers and
-/// task.survey_rows.
+/// Reads a solve file made for `fingerprint` into task.gram and task.outliers.
 void read_solve(const StageBytes& solve, const ShotFingerprint& fingerprint, denoise::StageTask& task);
 
-/// A modes task's output (its one band in task.modes), tied to the solve file it used.
-std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const denoise::StageTask& task);
+/// A survey task's output (task.survey_rows of its rows), tied to the solve file it used.
+std::string survey_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const denoise::StageTask& task);
 
-/// Checks the modes files of a job: made for `fingerprint` from `solve`, every
-/// row of the shot once. Fills task.modes in row order.
-void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, const ShotFingerprint& fingerprint,
-                int width, int height, int channels, denoise::StageTask& task);
+/// Checks the survey files of a job: made for `fingerprint` from `solve`, every
+/// row of the shot once. Fills task.survey_rows (every row; empty without the mode filter).
+void read_surveys(const std::vector<StageBytes>& inputs, const StageBytes& solve, const ShotFingerprint& fingerprint,
+                  int height, denoise::StageTask& task);
+
+/// Names the survey sums of every row (StageTask::survey_rows), whatever files held them.
+std::string survey_digest(const std::vector<std::vector<double>>& rows);
+
+/// A modes task's output (its one band in task.modes), tied to the solve file
+/// and the survey sums (survey_digest) it used.
+std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const std::string& surveys,
+                        const denoise::StageTask& task);
+
+/// Checks the modes files of a job: made for `fingerprint` from `solve` and the
+/// surveys of digest `surveys`, every row of the shot once. Fills task.modes in row order.
+void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, const std::string& surveys,
+                const ShotFingerprint& fingerprint, int width, int height, int channels, denoise::StageTask& task);
 
 }  // namespace modestack::app

@@ -5,11 +5,12 @@
 # 1. Builds modestack and bench_make_noisy_sequence (Release) and makes a
 #    1920x1080 RGB half ZIP sequence of FRAMES (48) noisy frames in $BENCH_DIR.
 # 2. Times one process, `mpirun -n 1` and `mpirun -n 2` (2 ranks on this
-#    2-core machine: they share its cores), and a three-stage farm job run task
-#    after task: stats --rows 1/2 and 2/2, solve, write --frames 1/2 and 2/2;
-#    also stats --rows 1/2 on the first half of the frames, so that the model
-#    can split a statistics task into its per-frame (read, clean) and per-frame²
-#    (Gram) parts. Wall, CPU, peak RSS (GNU time) per run.
+#    2-core machine: they share its cores), and a four-stage farm job run task
+#    after task: stats --rows 1/2 and 2/2, solve, modes --rows 1/2 and 2/2,
+#    write --frames 1/2 and 2/2, and write --frames 1/4; also stats --rows 1/2
+#    on the first half of the frames, so that the model can split a statistics
+#    task into its per-frame (read, clean) and per-frame² (Gram) parts. Wall,
+#    CPU, peak RSS (GNU time) per run.
 # 3. Checks with idiff that the MPI and farm outputs hold the pixels of the
 #    single run, frame by frame.
 # Prints a Markdown table (also $BENCH_DIR/results/farm.md); raw runs in
@@ -73,10 +74,15 @@ for run in $(seq 1 "$repeats"); do
     bench_time "$tsv" stats-2/2 "$run" "$modestack" denoise "$input" -q --stage stats --rows 2/2 -o "$work/2.stats"
     bench_time "$tsv" solve "$run" "$modestack" denoise "$input" -q --stage solve --stats "$work/1.stats" \
         "$work/2.stats" -o "$work/shot.solve"
-    bench_time "$tsv" write-1/2 "$run" "$modestack" denoise "$input" -q --stage write --solve "$work/shot.solve" \
-        --frames 1/2 -o "$work/farm/d.%04d.exr"
-    bench_time "$tsv" write-2/2 "$run" "$modestack" denoise "$input" -q --stage write --solve "$work/shot.solve" \
-        --frames 2/2 -o "$work/farm/d.%04d.exr"
+    bench_time "$tsv" modes-1/2 "$run" "$modestack" denoise "$input" -q --stage modes --solve "$work/shot.solve" \
+        --rows 1/2 -o "$work/1.modes"
+    bench_time "$tsv" modes-2/2 "$run" "$modestack" denoise "$input" -q --stage modes --solve "$work/shot.solve" \
+        --rows 2/2 -o "$work/2.modes"
+    write=("$modestack" denoise "$input" -q --stage write --solve "$work/shot.solve" --modes "$work/1.modes"
+        "$work/2.modes")
+    bench_time "$tsv" write-1/2 "$run" "${write[@]}" --frames 1/2 -o "$work/farm/d.%04d.exr"
+    bench_time "$tsv" write-2/2 "$run" "${write[@]}" --frames 2/2 -o "$work/farm/d.%04d.exr"
+    bench_time "$tsv" write-1/4 "$run" "${write[@]}" --frames 1/4 -o "$work/quarter/d.%04d.exr"
     bench_time "$tsv" "stats-1/2-F$half" "$run" "$modestack" denoise "$input" -q --frames "1-$half" --stage stats \
         --rows 1/2 -o "$work/half.stats"
     same_pixels "$work/one" "$work/mpi1"
@@ -85,6 +91,7 @@ for run in $(seq 1 "$repeats"); do
 done
 stats_bytes=$(stat -c %s "$work/1.stats")
 solve_bytes=$(stat -c %s "$work/shot.solve")
+modes_bytes=$(stat -c %s "$work/1.modes")
 
 report=$results/farm.md
 {
@@ -94,12 +101,13 @@ report=$results/farm.md
     echo "Source: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet 2>/dev/null || echo ' + uncommitted changes')."
     echo "Data: $frames frames of $size RGB half ZIP; default options (mode filter, auto rank, gram)."
     echo "Min of $repeats run(s). MPI and farm outputs: pixels identical to the single run (idiff, every frame)."
-    echo "Stage files: statistics $((stats_bytes / 1024)) KiB per half, solve $((solve_bytes / 1024)) KiB."
+    echo "Stage files: statistics $((stats_bytes / 1024)) KiB per half, solve $((solve_bytes / 1024)) KiB, modes $((modes_bytes / 1048576)) MiB per half."
     echo
     echo "| run | wall s | CPU s | peak RSS MB | wall × single |"
     echo "|---|---|---|---|---|"
     read -r single _ < <(bench_stats "$tsv" single 3)
-    for label in single mpirun-1 mpirun-2 stats-1/2 stats-2/2 solve write-1/2 write-2/2 "stats-1/2-F$half"; do
+    for label in single mpirun-1 mpirun-2 stats-1/2 stats-2/2 solve modes-1/2 modes-2/2 write-1/2 write-2/2 write-1/4 \
+        "stats-1/2-F$half"; do
         read -r wall _ < <(bench_stats "$tsv" "$label" 3)
         read -r cpu _ < <(bench_stats "$tsv" "$label" 7)
         rss=$(awk -F'\t' -v l="$label" '$1 == l && $6 > m { m = $6 } END { printf "%.0f", m / 1024 }' "$tsv")

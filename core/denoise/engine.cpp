@@ -57,7 +57,7 @@ public:
         int halo_rows = m_settings.sigma_radius + 1, plan_modes = largest_rank;
         m_filter_options = m_settings.mode_filter;
         if (m_settings.mode_filter.enabled) {
-            if (!m_settings.feature_guide.kinds.empty() && !in_stage(Stage::Statistics)) {
+            if (!m_settings.feature_guide.kinds.empty() && !in_stage(Stage::Statistics) && !in_stage(Stage::Solve)) {
                 m_features.emplace(m_source, m_settings.feature_guide, m_progress);
                 m_filter_options.feature_channels = m_features->channels();
                 m_report.feature_guide = m_features->summary();
@@ -90,7 +90,8 @@ public:
         start = Clock::now();
         m_report.rank = lowrank::choose_rank(basis, m_settings.rank);
         double survey_seconds = 0;
-        if (m_settings.mode_filter.enabled) {
+        // A farm's solve task leaves the survey to the survey tasks (stage_task.h).
+        if (m_settings.mode_filter.enabled && !in_stage(Stage::Solve)) {
             auto survey_start = Clock::now();
             if (in_stage(Stage::Modes) || in_stage(Stage::Write))
                 restore_mode_filter_survey(basis);
@@ -98,12 +99,14 @@ public:
                 survey_mode_filter(basis);
             survey_seconds = seconds_since(survey_start);
             m_report.seconds_filter_survey = survey_seconds;
+            if (in_stage(Stage::Survey))
+                return m_report;
         }
         int rank = m_report.rank.rank;
         describe_basis(basis, rank);
         m_report.seconds_solve = seconds_since(start) - survey_seconds + m_solve_seconds;
         m_report.seconds_statistics -= m_solve_seconds;
-        if (in_stage(Stage::Solve))
+        if (in_stage(Stage::Solve) || in_stage(Stage::Survey))
             return m_report;
 
         start = Clock::now();
@@ -129,8 +132,10 @@ private:
             check_statistics_rows(task.row_begin, task.row_end, m_shape.height);
         if (task.stage == Stage::Solve && static_cast<int>(task.gram_blocks.size()) != stage_blocks(m_shape.height))
             throw internal_error("the solve stage needs every block's sums");
-        const bool after_solve = task.stage == Stage::Modes || task.stage == Stage::Write;
-        if (task.stage == Stage::Modes && (task.row_begin < 0 || task.row_begin >= task.row_end || task.row_end > m_shape.height))
+        const bool after_solve =
+            task.stage == Stage::Survey || task.stage == Stage::Modes || task.stage == Stage::Write;
+        const bool by_rows = task.stage == Stage::Survey || task.stage == Stage::Modes;
+        if (by_rows && (task.row_begin < 0 || task.row_begin >= task.row_end || task.row_end > m_shape.height))
             throw usage_error(fmt::format("--rows {}-{}: the shot has rows 0-{}", task.row_begin, task.row_end - 1,
                                           m_shape.height - 1));
         if (after_solve && m_settings.non_negative == NonNegativeMode::KeepSum)
@@ -138,8 +143,9 @@ private:
                                           "needs every frame of a pixel; use clamp or run on one machine",
                                           name));
         if (after_solve && !task.gram)
-            throw internal_error("the modes and write stages need the merged sums");
-        if (after_solve && m_settings.mode_filter.enabled && static_cast<int>(task.survey_rows.size()) != m_shape.height)
+            throw internal_error("the survey, modes and write stages need the merged sums");
+        if (after_solve && task.stage != Stage::Survey && m_settings.mode_filter.enabled &&
+            static_cast<int>(task.survey_rows.size()) != m_shape.height)
             throw internal_error("the modes and write stages need the mode filter's survey of every row");
     }
 
@@ -169,7 +175,7 @@ private:
         task.outliers = m_report.outliers;
     }
 
-    // --stage write: the survey the solve task made, without a pass over the shot.
+    // --stage modes and write: the survey the survey tasks made, without a pass over the shot.
     void restore_mode_filter_survey(const lowrank::Basis& basis)
     {
         m_filter_modes = filter_survey_modes(basis);
@@ -469,15 +475,20 @@ private:
         m_filter_modes = filter_survey_modes(basis);
         Eigen::MatrixXd temporal = basis.temporal.leftCols(m_filter_modes);
         SureSurvey survey(m_filter_options, m_shape.width, m_shape.height, m_shape.channels, m_filter_modes);
-        ensure_whole_shot();
-        if (!plan.in_memory)
+        // A survey task (stage_task.h) reads its own rows only, with their halo.
+        const bool task = in_stage(Stage::Survey);
+        const int first_row = task ? m_settings.stage->row_begin : 0;
+        const int last_row = task ? m_settings.stage->row_end : m_shape.height;
+        if (!task)
+            ensure_whole_shot();
+        if (task || !plan.in_memory)
             ++m_report.passes;
-        m_progress.begin("mode filter: choosing widths", m_shape.height);
+        m_progress.begin("mode filter: choosing widths", last_row - first_row);
         Band band;
         std::vector<float> coefficients, noise_variance, features;
-        for (int row = 0; row < m_shape.height; row += plan.band_rows) {
-            int end = std::min(m_shape.height, row + plan.band_rows);
-            Band& data = band_with_halo(band, row, end);
+        for (int row = first_row; row < last_row; row += plan.band_rows) {
+            int end = std::min(last_row, row + plan.band_rows);
+            Band& data = task ? read_task_band(band, row, end) : band_with_halo(band, row, end);
             lowrank::BandView noisy = data.view(m_shape.frames).view();
             coefficients.resize(static_cast<size_t>(data.rows) * m_filter_modes);
             lowrank::MutableBandView coefficient_view{coefficients.data(), data.rows, m_filter_modes, data.rows};
@@ -490,9 +501,19 @@ private:
             m_progress.advance(end - row);
         }
         m_progress.end();
-        if (in_stage(Stage::Solve))
-            m_settings.stage->survey_rows = survey.row_sums(0, m_shape.height);
-        finish_mode_filter_survey(survey);
+        if (task)
+            m_settings.stage->survey_rows = survey.row_sums(first_row, last_row);
+        else
+            finish_mode_filter_survey(survey);
+    }
+
+    // A farm task's band: rows [row, end) with the plan's halo rows around them,
+    // read from the source (never the whole shot), cleaned in full.
+    Band& read_task_band(Band& band, int row, int end)
+    {
+        const int halo = m_report.plan.halo_rows;
+        read_band(band, std::max(0, row - halo), std::min(m_shape.height, end + halo), nullptr);
+        return band;
     }
 
     // The filter per mode and, for auto rank, N from a finished survey.
@@ -744,9 +765,8 @@ private:
         std::vector<float> residual;
         for (int row = task.row_begin; row < task.row_end; row += m_report.plan.band_rows) {
             const int end = std::min(task.row_end, row + m_report.plan.band_rows);
-            const int halo = m_report.plan.halo_rows;
             m_patches = {row, end, task.row_begin, &result.patches};
-            read_band(band, std::max(0, row - halo), std::min(m_shape.height, end + halo), nullptr);
+            read_task_band(band, row, end);
             m_patches = {};
             prepare_band(band, row, end, modes, &residual, nullptr);
             // Copy the band's own rows into the task's images, mode by mode.

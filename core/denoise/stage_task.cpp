@@ -11,6 +11,7 @@ const char* stage_name(Stage stage)
     switch (stage) {
     case Stage::Statistics: return "stats";
     case Stage::Solve: return "solve";
+    case Stage::Survey: return "survey";
     case Stage::Modes: return "modes";
     default: return "write";
     }

@@ -3,15 +3,17 @@
 //   Statistics: pass 1 over a range of rows → the Gram sums of each fixed block
 //               of kStageBlockRows rows in it, and the outlier counts;
 //   Solve:      every block's sums, merged in block order (the order one run
-//               merges them in, so the bits are the same) → the modes, N and,
-//               with the mode filter, its survey pass over the whole shot;
-//   Modes:      what Solve found → pass 2 over a range of rows, up to the
+//               merges them in, so the bits are the same) → the temporal modes;
+//   Survey:     the modes → the mode filter's SURE sums of each image row of a
+//               range of rows (one run adds the same rows up in the same order,
+//               so every task after it chooses the same filters and N);
+//   Modes:      what Solve and Survey found → pass 2 over a range of rows, up to the
 //               frames: the coefficient images (the spatial modes scaled by
 //               σ, unfiltered for sigma's residual and as the outputs are
 //               rebuilt from them), sigma's noise level per sample, the noise
 //               each filtered mode keeps per pixel, and the cleaned input values
 //               that differ from the files (NaN/Inf, fireflies);
-//   Write:      what Solve found and every band's modes → the outputs of the
+//   Write:      what Solve and Survey found and every band's modes → the outputs of the
 //               frames the task owns, reading only those frames.
 // The task holds the inputs and receives the outputs; app/stage_files.h moves
 // them between machines. Settings::stage null is a whole run.
@@ -31,9 +33,9 @@ namespace modestack::denoise {
 /// start on a block boundary.
 inline constexpr int kStageBlockRows = 64;
 
-enum class Stage { Statistics, Solve, Modes, Write };
+enum class Stage { Statistics, Solve, Survey, Modes, Write };
 
-/// "stats", "solve", "modes", "write".
+/// "stats", "solve", "survey", "modes", "write".
 const char* stage_name(Stage stage);
 
 /// Blocks of kStageBlockRows rows in `rows` image rows (the last one may be short).
@@ -68,18 +70,18 @@ struct ModesBand {
 
 struct StageTask {
     Stage stage = Stage::Statistics;
-    /// Statistics: rows [row_begin, row_end) (row_begin a multiple of kStageBlockRows); Modes: any rows.
+    /// Statistics: rows [row_begin, row_end) (row_begin a multiple of kStageBlockRows); Survey, Modes: any rows.
     int row_begin = 0;
     int row_end = 0;
     /// Statistics output: the sums of each block of its rows, in row order. Solve
     /// input: every block of the shot, in row order.
     std::vector<lowrank::GramAccumulator> gram_blocks;
-    /// Solve output, Write input: the blocks merged in row order.
+    /// Solve output, Survey, Modes and Write input: the blocks merged in row order.
     std::optional<lowrank::GramAccumulator> gram;
     /// Statistics output, Solve and Write input: what pass 1 cleaned.
     lowrank::OutlierCounts outliers;
-    /// Solve output, Modes and Write input: the mode filter's survey sums per image row
-    /// (SureSurvey::row_sums; empty without the mode filter).
+    /// Survey output: the mode filter's survey sums of its rows (SureSurvey::row_sums).
+    /// Modes and Write input: those of every row (empty without the mode filter).
     std::vector<std::vector<double>> survey_rows;
     /// Modes: rows [row_begin, row_end) (any rows). Modes output: its one band.
     /// Write input: every band of the shot, in row order, each row once.

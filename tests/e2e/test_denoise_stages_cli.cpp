@@ -1,4 +1,4 @@
-// End-to-end: `modestack denoise --stage stats|solve|modes|write` as a farm
+// End-to-end: `modestack denoise --stage stats|solve|survey|modes|write` as a farm
 // job runs it, one command per task, on a generated multi-layer sequence: the
 // outputs hold the same pixels, in every channel, as one `denoise` run, and a
 // write task reads no frame but its own (the others are damaged on disk);
@@ -76,7 +76,7 @@ void check_same_pixels(const std::string& a, const std::string& b)
 }
 }  // namespace
 
-TEST_CASE("denoise --stage: stats, solve, modes and write tasks give the pixels of one run, write reading only its frames")
+TEST_CASE("denoise --stage: stats, solve, survey, modes and write tasks give the pixels of one run, write reading only its frames")
 {
     TempDir dir;
     testkit::write_sequence(dir.file("in.%04d.exr"), frames(1, kFrames), layout(), noisy_value);
@@ -91,15 +91,17 @@ TEST_CASE("denoise --stage: stats, solve, modes and write tasks give the pixels 
         run_ok(in + method + "--stage stats --rows 128-149 -o " + job.file("s3.stats"));
         run_ok(in + method + "--stage solve --stats " + job.file("s3.stats") + " " + job.file("s1.stats") + " " +
                job.file("s2.stats") + " -o " + job.file("shot.solve") + " --json " + job.file("solve.json"));
-        // Modes tasks over other bands of rows than the statistics tasks.
-        run_ok(in + method + "--stage modes --solve " + job.file("shot.solve") + " --rows 0-40 -o " +
-               job.file("m1.modes"));
-        run_ok(in + method + "--stage modes --solve " + job.file("shot.solve") + " --rows 2/2 -o " +
-               job.file("m2.modes") + " --json " + job.file("modes.json"));
-        run_ok(in + method + "--stage modes --solve " + job.file("shot.solve") + " --rows 41-74 -o " +
-               job.file("m3.modes"));
-        const std::string write_all = in + method + "--stage write --solve " + job.file("shot.solve") + " --modes " +
-                                  job.file("m2.modes") + " " + job.file("m1.modes") + " " + job.file("m3.modes");
+        // Survey and modes tasks over other bands of rows than the statistics tasks.
+        const std::string after_solve = in + method + "--solve " + job.file("shot.solve") + " ";
+        run_ok(after_solve + "--stage survey --rows 0-59 -o " + job.file("1.survey"));
+        run_ok(after_solve + "--stage survey --rows 60-149 -o " + job.file("2.survey"));
+        const std::string surveys = "--survey " + job.file("2.survey") + " " + job.file("1.survey") + " ";
+        run_ok(after_solve + surveys + "--stage modes --rows 0-40 -o " + job.file("m1.modes"));
+        run_ok(after_solve + surveys + "--stage modes --rows 2/2 -o " + job.file("m2.modes") + " --json " +
+               job.file("modes.json"));
+        run_ok(after_solve + surveys + "--stage modes --rows 41-74 -o " + job.file("m3.modes"));
+        const std::string write_all = after_solve + surveys + "--stage write --modes " + job.file("m2.modes") + " " +
+                                      job.file("m1.modes") + " " + job.file("m3.modes");
         run_ok(write_all + " --frames 1/3 -o " + job.file("farm/d.####.exr"));
         // Frames 5-9 from a copy of the input whose other frames are damaged: a
         // write task that read one of them would fail.
@@ -117,7 +119,8 @@ TEST_CASE("denoise --stage: stats, solve, modes and write tasks give the pixels 
             file << std::string(size - size / 2, '\x5a');  // the pixel chunks at the end, same size
         }
         const std::string write_partial = "denoise " + partial + "/in.####.exr --layer DiffInd -q " + method +
-                                          "--stage write --solve " + job.file("shot.solve") + " --modes " +
+                                          "--stage write --solve " + job.file("shot.solve") + " " + surveys +
+                                          "--modes " +
                                           job.file("m1.modes") + " " + job.file("m2.modes") + " " +
                                           job.file("m3.modes");
         run_ok(write_partial + " --frames 5-9 -o " + job.file("farm/d.####.exr") + " --json " + job.file("write.json"));
@@ -130,9 +133,10 @@ TEST_CASE("denoise --stage: stats, solve, modes and write tasks give the pixels 
         CHECK(solve["outliers"]["fireflies"].get<int>() > 0);
         auto write = nlohmann::json::parse(read_text(job.file("write.json")));
         CHECK(write["frames_written"] == 5);
-        CHECK(write["rank"]["n"] == solve["rank"]["n"]);
-        CHECK(write["farm"]["modes_files"].size() == 3);
         auto modes = nlohmann::json::parse(read_text(job.file("modes.json")));
+        CHECK(write["rank"]["n"] == modes["rank"]["n"]);
+        CHECK(write["farm"]["modes_files"].size() == 3);
+        CHECK(write["farm"]["survey_files"].size() == 2);
         CHECK(modes["farm"]["rows"] == nlohmann::json::array({75, 149}));
     }
 }
@@ -158,9 +162,13 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
     }
     run_ok(in + "--rank 2 --stage stats --rows 1/1 -o " + dir.file("rank2.stats"));
     run_ok(in + "--rank 2 --stage solve --stats " + dir.file("rank2.stats") + " -o " + dir.file("rank2.solve"));
-    run_ok(in + "--stage modes --solve " + dir.file("shot.solve") + " --rows 1/2 -o " + dir.file("m1.modes"));
-    run_ok(in + "--stage modes --solve " + dir.file("shot.solve") + " --rows 2/2 -o " + dir.file("m2.modes"));
-    run_ok(in + "--stage modes --solve " + dir.file("shot.solve") + " --rows 0-99 -o " + dir.file("m0-99.modes"));
+    run_ok(in + "--stage survey --solve " + dir.file("shot.solve") + " --rows 1/1 -o " + dir.file("shot.survey"));
+    run_ok(in + "--stage survey --solve " + dir.file("changed.solve") + " --rows 1/1 -o " + dir.file("changed.survey"));
+    run_ok(in + "--stage survey --solve " + dir.file("shot.solve") + " --rows 0-99 -o " + dir.file("0-99.survey"));
+    const std::string with_solve = in + "--solve " + dir.file("shot.solve") + " --survey " + dir.file("shot.survey") + " ";
+    run_ok(with_solve + "--stage modes --rows 1/2 -o " + dir.file("m1.modes"));
+    run_ok(with_solve + "--stage modes --rows 2/2 -o " + dir.file("m2.modes"));
+    run_ok(with_solve + "--stage modes --rows 0-99 -o " + dir.file("m0-99.modes"));
     run_ok("denoise " + dir.file("other.####.exr") + " --layer DiffInd -q --stage stats --rows 2/2 -o " +
            dir.file("other.stats"));
     run_ok("denoise " + dir.file("in.####.exr") + " --frames 1-11 --layer DiffInd -q --stage stats --rows 2/2 -o " +
@@ -183,32 +191,40 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
          "rank3.stats: was made with other options: --rank"},
         {solve + dir.file("a1.stats") + " " + dir.file("junk.stats"), 1, "junk.stats: not a modestack stage file"},
         {solve + dir.file("a1.stats") + " " + dir.file("missing.stats"), 1, "missing.stats: cannot open"},
-        {in + "--stage write --solve " + dir.file("a1.stats") + " --modes " + dir.file("m1.modes") + " -o " +
-             dir.file("out/d.####.exr"),
+        {in + "--stage write --solve " + dir.file("a1.stats") + " --survey " + dir.file("shot.survey") + " --modes " +
+             dir.file("m1.modes") + " -o " + dir.file("out/d.####.exr"),
          1, "a1.stats: is the output of --stage stats, not of --stage solve"},
-        {in + "--stage modes --solve " + dir.file("a1.stats") + " --rows 1/2 -o " + dir.file("out/x.modes"), 1,
+        {in + "--stage survey --solve " + dir.file("a1.stats") + " --rows 1/2 -o " + dir.file("out/x.survey"), 1,
          "a1.stats: is the output of --stage stats, not of --stage solve"},
+        {with_solve + "--stage write --modes " + dir.file("m1.modes") + " -o " + dir.file("out/d.####.exr"), 1,
+         "m1.modes: rows 75-149 are in no modes file given"},
+        {with_solve + "--stage write --modes " + dir.file("m1.modes") + " " + dir.file("m0-99.modes") + " " +
+             dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
+         1, "are also in"},
+        {in + "--rank 2 --stage write --solve " + dir.file("rank2.solve") + " --survey " + dir.file("shot.survey") +
+             " --modes " + dir.file("m1.modes") + " " + dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
+         1, "was made with other options: --rank"},
+        {with_solve + "--stage write --modes " + dir.file("m1.modes") + " " + dir.file("a2.stats") + " -o " +
+             dir.file("out/d.####.exr"),
+         1, "a2.stats: is the output of --stage stats, not of --stage modes"},
+        {in + "--stage write --solve " + dir.file("changed.solve") + " --survey " + dir.file("changed.survey") +
+             " --modes " + dir.file("m1.modes") + " " + dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
+         1, "m1.modes: was made from another solve file than"},
+        {with_solve + "--stage write --survey " + dir.file("changed.survey") + " --modes " + dir.file("m1.modes") +
+             " " + dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
+         1, "changed.survey: was made from another solve file than"},
+        {in + "--stage modes --solve " + dir.file("shot.solve") + " --survey " + dir.file("0-99.survey") +
+             " --rows 1/2 -o " + dir.file("out/x.modes"),
+         1, "0-99.survey: rows 100-149 are in no survey file given"},
+        {with_solve + "--stage write -o " + dir.file("out/d.####.exr"), 2, "--stage write needs the modes files"},
         {in + "--stage write --solve " + dir.file("shot.solve") + " --modes " + dir.file("m1.modes") + " -o " +
              dir.file("out/d.####.exr"),
-         1, "m1.modes: rows 75-149 are in no modes file given"},
-        {in + "--stage write --solve " + dir.file("shot.solve") + " --modes " + dir.file("m1.modes") + " " +
-             dir.file("m0-99.modes") + " " + dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
-         1, "are also in"},
-        {in + "--rank 2 --stage write --solve " + dir.file("rank2.solve") + " --modes " + dir.file("m1.modes") + " " +
-             dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
-         1, "was made with other options: --rank"},
-        {in + "--stage write --solve " + dir.file("shot.solve") + " --modes " + dir.file("m1.modes") + " " +
-             dir.file("a2.stats") + " -o " + dir.file("out/d.####.exr"),
-         1, "a2.stats: is the output of --stage stats, not of --stage modes"},
-        {in + "--stage write --solve " + dir.file("changed.solve") + " --modes " + dir.file("m1.modes") + " " +
-             dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
-         1, "m1.modes: was made from another solve file than"},
-        {in + "--stage write --solve " + dir.file("shot.solve") + " -o " + dir.file("out/d.####.exr"), 2,
-         "--stage write needs the modes files"},
-        {in + "--stage modes --solve " + dir.file("shot.solve") + " -o " + dir.file("out/x.modes"), 2,
-         "--stage modes needs --rows"},
-        {in + "--stage modes --solve " + dir.file("shot.solve") + " --rows 100-150 -o " + dir.file("out/x.modes"), 2,
-         "the shot has rows 0-149"},
+         2, "--stage write needs the survey files"},
+        {with_solve + "--stage modes -o " + dir.file("out/x.modes"), 2, "--stage modes needs --rows"},
+        {with_solve + "--stage modes --rows 100-150 -o " + dir.file("out/x.modes"), 2, "the shot has rows 0-149"},
+        {in + "--stage survey --solve " + dir.file("shot.solve") + " --survey " + dir.file("shot.survey") +
+             " --rows 1/2 -o " + dir.file("out/x.survey"),
+         2, "--survey belongs to --stage modes or write"},
         {in + "--stage stats --rows 1/2 --modes " + dir.file("m1.modes") + " -o " + dir.file("out/x.stats"), 2,
          "--modes belongs to --stage write"},
         {in + "--stage stats --rows 1/2 --non-negative --non-negative-mode keep-sum -o " + dir.file("out/x.stats"), 2,
@@ -217,7 +233,8 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
         {in + "--stage stats --rows 4/3 -o " + dir.file("out/x.stats"), 2, "--rows 4/3"},
         {in + "--stage stats --rows 1/4 -o " + dir.file("out/x.stats"), 2, "fewer than 4 tasks"},
         {in + "--stage stats -o " + dir.file("out/x.stats"), 2, "--stage stats needs --rows"},
-        {in + "--stage solve --rows 1/2 -o " + dir.file("out/x.solve"), 2, "--rows belongs to --stage stats or modes"},
+        {in + "--stage solve --rows 1/2 -o " + dir.file("out/x.solve"), 2,
+         "--rows belongs to --stage stats, survey or modes"},
         {in + "--stage stats --rows 1/2 --method rsvd -o " + dir.file("out/x.stats"), 2, "--method rsvd"},
         {in + "--stage merge -o " + dir.file("out/x.stats"), 2, "--stage 'merge'"},
         {in + "--stage stats --rows 1/2 --report r.html -o " + dir.file("out/x.stats"), 2,
@@ -233,8 +250,8 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
             CHECK(testkit::list_directory(dir.file("out")).empty());
     }
     // A write task's --frames must be frames of the solve file's shot.
-    auto outside = run_modestack(in + "--stage write --solve " + dir.file("shot.solve") + " --modes " +
-                                 dir.file("m1.modes") + " " + dir.file("m2.modes") + " --frames 10-14 -o " +
+    auto outside = run_modestack(with_solve + "--stage write --modes " + dir.file("m1.modes") + " " +
+                                 dir.file("m2.modes") + " --frames 10-14 -o " +
                                  dir.file("w/d.####.exr"));
     CHECK(outside.exit_code == 2);
     CHECK_MESSAGE(outside.err.find("frame 13 is not in the shot") != std::string::npos, outside.err);
