@@ -5,9 +5,9 @@
 # 1. Builds modestack and bench_make_noisy_sequence (Release) and makes a
 #    1920x1080 RGB half ZIP sequence of FRAMES (48) noisy frames in $BENCH_DIR.
 # 2. Times one process, `mpirun -n 1` and `mpirun -n 2` (2 ranks on this
-#    2-core machine: they share its cores), and a four-stage farm job run task
-#    after task: stats --rows 1/2 and 2/2, solve, modes --rows 1/2 and 2/2,
-#    write --frames 1/2 and 2/2, and write --frames 1/4; also stats --rows 1/2
+#    2-core machine: they share its cores), and a five-stage farm job run task
+#    after task: stats --rows 1/2 and 2/2, solve, survey and modes --rows 1/2
+#    and 2/2, write --frames 1/2 and 2/2, and write --frames 1/4; also stats --rows 1/2
 #    on the first half of the frames, so that the model can split a statistics
 #    task into its per-frame (read, clean) and per-frame² (Gram) parts. Wall,
 #    CPU, peak RSS (GNU time) per run.
@@ -74,12 +74,14 @@ for run in $(seq 1 "$repeats"); do
     bench_time "$tsv" stats-2/2 "$run" "$modestack" denoise "$input" -q --stage stats --rows 2/2 -o "$work/2.stats"
     bench_time "$tsv" solve "$run" "$modestack" denoise "$input" -q --stage solve --stats "$work/1.stats" \
         "$work/2.stats" -o "$work/shot.solve"
-    bench_time "$tsv" modes-1/2 "$run" "$modestack" denoise "$input" -q --stage modes --solve "$work/shot.solve" \
-        --rows 1/2 -o "$work/1.modes"
-    bench_time "$tsv" modes-2/2 "$run" "$modestack" denoise "$input" -q --stage modes --solve "$work/shot.solve" \
-        --rows 2/2 -o "$work/2.modes"
-    write=("$modestack" denoise "$input" -q --stage write --solve "$work/shot.solve" --modes "$work/1.modes"
-        "$work/2.modes")
+    bench_time "$tsv" survey-1/2 "$run" "$modestack" denoise "$input" -q --stage survey --solve "$work/shot.solve" \
+        --rows 1/2 -o "$work/1.survey"
+    bench_time "$tsv" survey-2/2 "$run" "$modestack" denoise "$input" -q --stage survey --solve "$work/shot.solve" \
+        --rows 2/2 -o "$work/2.survey"
+    surveyed=("$modestack" denoise "$input" -q --solve "$work/shot.solve" --survey "$work/1.survey" "$work/2.survey")
+    bench_time "$tsv" modes-1/2 "$run" "${surveyed[@]}" --stage modes --rows 1/2 -o "$work/1.modes"
+    bench_time "$tsv" modes-2/2 "$run" "${surveyed[@]}" --stage modes --rows 2/2 -o "$work/2.modes"
+    write=("${surveyed[@]}" --stage write --modes "$work/1.modes" "$work/2.modes")
     bench_time "$tsv" write-1/2 "$run" "${write[@]}" --frames 1/2 -o "$work/farm/d.%04d.exr"
     bench_time "$tsv" write-2/2 "$run" "${write[@]}" --frames 2/2 -o "$work/farm/d.%04d.exr"
     bench_time "$tsv" write-1/4 "$run" "${write[@]}" --frames 1/4 -o "$work/quarter/d.%04d.exr"
@@ -92,6 +94,7 @@ done
 stats_bytes=$(stat -c %s "$work/1.stats")
 solve_bytes=$(stat -c %s "$work/shot.solve")
 modes_bytes=$(stat -c %s "$work/1.modes")
+survey_bytes=$(stat -c %s "$work/1.survey")
 
 report=$results/farm.md
 {
@@ -101,12 +104,13 @@ report=$results/farm.md
     echo "Source: $(git rev-parse --short HEAD 2>/dev/null || echo unknown)$(git diff --quiet 2>/dev/null || echo ' + uncommitted changes')."
     echo "Data: $frames frames of $size RGB half ZIP; default options (mode filter, auto rank, gram)."
     echo "Min of $repeats run(s). MPI and farm outputs: pixels identical to the single run (idiff, every frame)."
-    echo "Stage files: statistics $((stats_bytes / 1024)) KiB per half, solve $((solve_bytes / 1024)) KiB, modes $((modes_bytes / 1048576)) MiB per half."
+    echo "Stage files: statistics $((stats_bytes / 1024)) KiB per half, solve $((solve_bytes / 1024)) KiB, survey $((survey_bytes / 1024)) KiB and modes $((modes_bytes / 1048576)) MiB per half."
     echo
     echo "| run | wall s | CPU s | peak RSS MB | wall × single |"
     echo "|---|---|---|---|---|"
     read -r single _ < <(bench_stats "$tsv" single 3)
-    for label in single mpirun-1 mpirun-2 stats-1/2 stats-2/2 solve modes-1/2 modes-2/2 write-1/2 write-2/2 write-1/4 \
+    for label in single mpirun-1 mpirun-2 stats-1/2 stats-2/2 solve survey-1/2 survey-2/2 modes-1/2 modes-2/2 \
+        write-1/2 write-2/2 write-1/4 \
         "stats-1/2-F$half"; do
         read -r wall _ < <(bench_stats "$tsv" "$label" 3)
         read -r cpu _ < <(bench_stats "$tsv" "$label" 7)
