@@ -10,6 +10,7 @@
 #include <regex>
 #include <set>
 #include <tuple>
+#include <utility>
 
 namespace modestack::app {
 namespace {
@@ -140,7 +141,7 @@ StageRun::StageRun(const StageOptions& options, const CLI::App& command) : m_opt
     for (const std::string& path : options.survey)
         m_surveys.push_back(read_stage_bytes(path));
     if (options.modes_bytes)
-        m_modes = *options.modes_bytes;
+        m_modes = std::move(*options.modes_bytes);
     for (const std::string& path : options.modes)
         m_modes.push_back(read_stage_bytes(path));
 }

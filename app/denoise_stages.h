@@ -37,7 +37,7 @@ struct StageOptions {
     const std::vector<StageBytes>* stats_bytes = nullptr;  ///< solve input, instead of --stats
     const StageBytes* solve_bytes = nullptr;                ///< survey, modes and write input, instead of --solve
     const std::vector<StageBytes>* survey_bytes = nullptr;  ///< modes and write input, instead of --survey
-    const std::vector<StageBytes>* modes_bytes = nullptr;   ///< write input, instead of --modes
+    std::vector<StageBytes>* modes_bytes = nullptr;  ///< write input, instead of --modes (moved from: large)
     std::string* output_bytes = nullptr;                    ///< stats, solve, survey or modes output, instead of -o
 };
 

@@ -156,7 +156,7 @@ int run_mpi_denoise(const std::string& frames, const RunStage& run_stage)
         modes.output_bytes = &mode_images;
         if (int code = run_stage(modes, frames, lead); code != 0)
             mpi.abort("the modes stage failed", code);
-        const std::vector<StageBytes> all_modes = mpi.all_gather(mode_images, "modes");
+        std::vector<StageBytes> all_modes = mpi.all_gather(mode_images, "modes");
 
         StageOptions write;
         write.stage = "write";

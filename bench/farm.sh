@@ -5,7 +5,8 @@
 # 1. Builds modestack and bench_make_noisy_sequence (Release) and makes a
 #    1920x1080 RGB half ZIP sequence of FRAMES (48) noisy frames in $BENCH_DIR.
 # 2. Times one process, `mpirun -n 1` and `mpirun -n 2` (2 ranks on this
-#    2-core machine: they share its cores), and a five-stage farm job run task
+#    2-core machine: they share its cores; `--bind-to none`, or Open MPI pins
+#    each of 1 or 2 ranks to one core), and a five-stage farm job run task
 #    after task: stats --rows 1/2 and 2/2, solve, survey and modes --rows 1/2
 #    and 2/2, write --frames 1/2 and 2/2, and write --frames 1/4; also stats --rows 1/2
 #    on the first half of the frames, so that the model can split a statistics
@@ -68,8 +69,8 @@ for run in $(seq 1 "$repeats"); do
     rm -rf "$work"
     mkdir -p "$work"
     bench_time "$tsv" single "$run" "$modestack" denoise "$input" -q -o "$work/one/d.%04d.exr"
-    bench_time "$tsv" mpirun-1 "$run" mpirun -n 1 "$modestack" denoise "$input" -q -o "$work/mpi1/d.%04d.exr"
-    bench_time "$tsv" mpirun-2 "$run" mpirun -n 2 "$modestack" denoise "$input" -q -o "$work/mpi2/d.%04d.exr"
+    bench_time "$tsv" mpirun-1 "$run" mpirun --bind-to none -n 1 "$modestack" denoise "$input" -q -o "$work/mpi1/d.%04d.exr"
+    bench_time "$tsv" mpirun-2 "$run" mpirun --bind-to none -n 2 "$modestack" denoise "$input" -q -o "$work/mpi2/d.%04d.exr"
     bench_time "$tsv" stats-1/2 "$run" "$modestack" denoise "$input" -q --stage stats --rows 1/2 -o "$work/1.stats"
     bench_time "$tsv" stats-2/2 "$run" "$modestack" denoise "$input" -q --stage stats --rows 2/2 -o "$work/2.stats"
     bench_time "$tsv" solve "$run" "$modestack" denoise "$input" -q --stage solve --stats "$work/1.stats" \
