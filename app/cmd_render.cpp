@@ -211,7 +211,8 @@ Subcommand add_render_command(CLI::App& parent)
     command->add_option("--fps", options->fps,
                         "glTF scenes: frames per second; frame f is at animation time (f-1)/fps (default: the "
                         "file's scene extras 'fps', else 24)")
-        ->check(CLI::PositiveNumber);
+        ->check(CLI::PositiveNumber)
+        ->default_str("file's, else 24");  // 0 inside means "not given"
     command->add_option("--spp", options->render.spp, "Samples per pixel")->check(kAtLeastOne);
     command->add_option("--size", options->size, "Image size WIDTHxHEIGHT");
     command->add_option("--seed", options->render.seed, "Seed of the sample hash");

@@ -13,6 +13,7 @@
 #include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -63,9 +64,10 @@ public:
                 m_report.feature_guide = m_features->summary();
             }
             halo_rows = std::max(halo_rows, mode_filter_halo(m_filter_options));
-            // Surveyed and filtered coefficients, the per-sample kept noise (F),
+            // Surveyed and filtered coefficients, one frame's kept noise per worker,
             // the guide with its noise (a few images) and the feature rows.
-            plan_modes += std::max(m_settings.mode_filter.max_modes, largest_rank) + m_shape.frames + 6 +
+            plan_modes += std::max(m_settings.mode_filter.max_modes, largest_rank) +
+                          tbb::this_task_arena::max_concurrency() + 6 +
                           (m_filter_options.feature_channels + m_shape.channels - 1) / m_shape.channels;
         }
         m_report.plan =
