@@ -222,7 +222,7 @@ TEST_CASE("mode filter: streamed and kept shots, 1 and 2 threads give the same b
         return std::make_pair(report, sink);
     };
     // Budgets: everything at once; the shot kept but pass 2 in windows; streamed.
-    const std::int64_t whole = std::int64_t(1) << 30, windows = 2'200'000, bands = 1'880'000;
+    const std::int64_t whole = std::int64_t(1) << 30, windows = 2'200'000, bands = 1'680'000;
     auto [kept_report, kept] = run(whole, 2);
     auto [windowed_report, windowed] = run(windows, 2);
     auto [streamed_report, streamed] = run(bands, 2);

@@ -183,7 +183,7 @@ TEST_CASE("stages: stats, solve, survey, modes and write tasks over other bands 
     MemoryShot shot = noisy_shot(false);
     std::vector<bool> kept;
     for (bool filter : {true, false})
-        for (std::int64_t memory : {std::int64_t(1) << 30, std::int64_t(1'100'000)}) {
+        for (std::int64_t memory : {std::int64_t(1) << 30, std::int64_t(950'000)}) {
             CAPTURE(filter);
             CAPTURE(memory);
             Settings settings;
