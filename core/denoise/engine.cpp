@@ -705,7 +705,7 @@ private:
             // Sigma of the band's own rows, frame by frame as a write task does it.
             sigma.resize(static_cast<size_t>(valid) * frames);
             tbb::parallel_for(0, frames, [&](int t) {
-                std::vector<float> kept_noise;
+                std::vector<float>& kept_noise = m_kept_noise.local();  // nothing below runs in parallel
                 if (filter) {
                     kept_noise.resize(static_cast<size_t>(valid));
                     kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes, m_gains.data(), valid,
@@ -882,6 +882,7 @@ private:
     std::vector<float> m_noise_variance;  // sigma's s² of the valid rows
     std::vector<float> m_gains;           // the mode filter's kept-noise gain per valid pixel and mode
     lowrank::ConfidenceOptions m_confidence;
+    tbb::enumerable_thread_specific<std::vector<float>> m_kept_noise;  // one frame's, per worker
     // --stage modes: read_band records the cleaned values of rows [row_begin, row_end)
     // that differ from the files, samples counted from first_row.
     struct PatchRows {

@@ -17,13 +17,10 @@ namespace {
 // Image rows [first_row, first_row + rows) of one frame's samples, in double:
 // each value is computed once, although every window around it reads it.
 struct Rows {
-    std::vector<double> values;
+    double* values = nullptr;
     int first_row = 0;
     std::int64_t row_length = 0;
-    double operator()(int y, std::int64_t k) const
-    {
-        return values[static_cast<std::size_t>((y - first_row) * row_length + k)];
-    }
+    double operator()(int y, std::int64_t k) const { return values[(y - first_row) * row_length + k]; }
 };
 
 // The residual's white-noise part: r minus the mean of its 4-neighbours (clipped
@@ -92,41 +89,43 @@ public:
     ResidualWindows(const ImageBandShape& shape, int radius, int valid_y0, int valid_y1)
         : m_shape(shape), m_radius(radius), m_valid_y0(valid_y0), m_valid_y1(valid_y1),
           m_row_length(static_cast<std::int64_t>(shape.width) * shape.channels),
-          m_window_first(std::max(0, valid_y0 - radius)), m_window_last(std::min(shape.height - 1, valid_y1 - 1 + radius)),
-          m_column_sum(static_cast<std::size_t>(m_row_length))
+          m_window_first(std::max(0, valid_y0 - radius)), m_window_last(std::min(shape.height - 1, valid_y1 - 1 + radius))
     {
         // The windows read rows [window_first, window_last]; the high-pass one row more.
-        const int residual_first = std::max(0, m_window_first - 1);
-        const int residual_last = std::min(m_shape.height - 1, m_window_last + 1);
-        m_residual = {std::vector<double>(static_cast<std::size_t>((residual_last - residual_first + 1) * m_row_length)),
-                      residual_first, m_row_length};
-        m_power = {std::vector<double>(static_cast<std::size_t>((m_window_last - m_window_first + 1) * m_row_length)),
-                   m_window_first, m_row_length};
+        m_residual_first = std::max(0, m_window_first - 1);
+        m_residual_last = std::min(m_shape.height - 1, m_window_last + 1);
     }
 
     void compute(const float* noisy_frame, const float* rebuilt_frame, float* mean, float* power)
     {
-        const std::int64_t first = m_residual.first_row * m_row_length;
-        for (std::size_t j = 0; j < m_residual.values.size(); ++j)
-            m_residual.values[j] = static_cast<double>(noisy_frame[first + j]) - rebuilt_frame[first + j];
+        // This thread's buffers, reused from frame to frame and band to band (fresh
+        // ones cost the kernel's page zeroing every frame); compute() runs nothing
+        // in parallel, so no other frame can use them meanwhile.
+        static thread_local std::vector<double> residual_buffer, power_buffer, column_sum;
+        residual_buffer.resize(static_cast<std::size_t>((m_residual_last - m_residual_first + 1) * m_row_length));
+        column_sum.resize(static_cast<std::size_t>(m_row_length));
+        const Rows residual{residual_buffer.data(), m_residual_first, m_row_length};
+        const std::int64_t first = m_residual_first * m_row_length;
+        for (std::size_t j = 0; j < residual_buffer.size(); ++j)
+            residual_buffer[j] = static_cast<double>(noisy_frame[first + j]) - rebuilt_frame[first + j];
         if (mean)
-            windowed_mean(m_residual, m_shape, m_radius, m_valid_y0, m_valid_y1, mean, m_column_sum);
+            windowed_mean(residual, m_shape, m_radius, m_valid_y0, m_valid_y1, mean, column_sum);
         if (!power)
             return;
+        power_buffer.resize(static_cast<std::size_t>((m_window_last - m_window_first + 1) * m_row_length));
+        const Rows power_rows{power_buffer.data(), m_window_first, m_row_length};
         for (int y = m_window_first; y <= m_window_last; ++y)
             for (std::int64_t k = 0; k < m_row_length; ++k)
-                m_power.values[static_cast<std::size_t>((y - m_window_first) * m_row_length + k)] =
-                    high_pass_power(m_residual, m_shape, y, k);
-        windowed_mean(m_power, m_shape, m_radius, m_valid_y0, m_valid_y1, power, m_column_sum);
+                power_buffer[static_cast<std::size_t>((y - m_window_first) * m_row_length + k)] =
+                    high_pass_power(residual, m_shape, y, k);
+        windowed_mean(power_rows, m_shape, m_radius, m_valid_y0, m_valid_y1, power, column_sum);
     }
 
 private:
     ImageBandShape m_shape;
     int m_radius, m_valid_y0, m_valid_y1;
     std::int64_t m_row_length;
-    int m_window_first, m_window_last;
-    std::vector<double> m_column_sum;
-    Rows m_residual, m_power;
+    int m_window_first, m_window_last, m_residual_first = 0, m_residual_last = 0;
 };
 
 void check_band(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape, int valid_y0,
