@@ -38,7 +38,8 @@ public:
     /// Floats follow every double in the file.
     void add_floats(const std::vector<float>& values)
     {
-        m_floats.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float));
+        if (!values.empty())  // an empty vector's data() may be null
+            m_floats.append(reinterpret_cast<const char*>(values.data()), values.size() * sizeof(float));
     }
     std::size_t doubles() const { return m_bytes.size() / sizeof(double); }
     std::size_t floats() const { return m_floats.size() / sizeof(float); }
@@ -78,7 +79,8 @@ public:
     std::vector<float> floats(std::size_t count)
     {
         std::vector<float> values(count);
-        std::memcpy(values.data(), m_floats, count * sizeof(float));
+        if (count > 0)  // memcpy from or to null is undefined even for 0 bytes
+            std::memcpy(values.data(), m_floats, count * sizeof(float));
         m_floats += count * sizeof(float);
         return values;
     }
