@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cstring>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 namespace modestack::app {
@@ -226,13 +227,50 @@ void check_row_coverage(std::vector<RowBand>& bands, const std::vector<StageFile
                         fmt::format("rows {}-{} are in no {} file given", covered, height - 1, kind));
 }
 
-// FNV-1a of a solve file: the modes files name the solve they were made from.
-std::string solve_digest(const StageBytes& solve)
+// FNV-1a of `bytes`, in hex: how survey and modes files name the solve file
+// and the survey sums they were made from.
+std::string digest_of(const std::string& bytes)
 {
     std::uint64_t hash = 1469598103934665603ull;
-    for (unsigned char c : solve.bytes)
+    for (unsigned char c : bytes)
         hash = (hash ^ c) * 1099511628211ull;
     return fmt::format("{:016x}", hash);
+}
+
+// The files of one row-split stage of a job, checked: each a `stage` file of
+// this shot and options holding rows [begin, end) of a shot of `height` rows,
+// made from `solve` when given (its "solve" digest), and `fits` its header
+// (fits(path, header, begin, end) false: "damaged <kind> file"; it may throw
+// its own error); together they hold every row exactly once.
+// `bands` come sorted by row.
+struct RowFiles {
+    std::vector<StageFile> files;
+    std::vector<RowBand> bands;
+};
+
+template <typename Fits>
+RowFiles read_row_files(const std::vector<StageBytes>& inputs, denoise::Stage stage, const ShotFingerprint& fingerprint,
+                        int height, const std::string& kind, const StageBytes* solve, Fits&& fits)
+{
+    RowFiles result;
+    const std::string solve_digest = solve ? digest_of(solve->bytes) : std::string();
+    for (const StageBytes& input : inputs) {
+        const std::string& path = input.name;
+        result.files.push_back(parse_stage_file(path, input.bytes, stage, fingerprint));
+        const nlohmann::json& header = result.files.back().header;
+        try {
+            if (solve && header.at("solve").get<std::string>() != solve_digest)
+                throw bad_input(path, fmt::format("was made from another solve file than {}", solve->name));
+            const int begin = header.at("rows").at(0).get<int>(), end = header.at("rows").at(1).get<int>();
+            if (begin < 0 || end > height || begin >= end || !fits(path, header, begin, end))
+                throw bad_input(path, fmt::format("damaged {} file: its sizes do not fit the shot", kind));
+            result.bands.push_back({begin, end, result.files.size() - 1});
+        } catch (const nlohmann::json::exception& error) {
+            throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
+        }
+    }
+    check_row_coverage(result.bands, result.files, height, kind);
+    return result;
 }
 
 }  // namespace
@@ -280,25 +318,15 @@ void read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprin
 {
     if (inputs.empty())
         throw usage_error("--stage solve needs the statistics files of the job: --stats FILE...");
-    std::vector<StageFile> files;
-    std::vector<RowBand> bands;
-    for (const StageBytes& input : inputs) {
-        const std::string& path = input.name;
-        files.push_back(parse_stage_file(path, input.bytes, denoise::Stage::Statistics, fingerprint));
-        const nlohmann::json& header = files.back().header;
-        try {
-            const int begin = header.at("rows").at(0).get<int>(), end = header.at("rows").at(1).get<int>();
+    const auto [files, bands] = read_row_files(
+        inputs, denoise::Stage::Statistics, fingerprint, height, "statistics", nullptr,
+        [&](const std::string&, const nlohmann::json& header, int begin, int end) {
             const int blocks = denoise::stage_blocks(end - begin);
-            if (header.at("frames").get<int>() != frames || header.at("block_rows").get<int>() != denoise::kStageBlockRows ||
-                begin < 0 || end > height || begin >= end || static_cast<int>(header.at("blocks").size()) != blocks ||
-                header.at("doubles").get<std::size_t>() != blocks * gram_doubles(frames))
-                throw bad_input(path, "damaged statistics file: its sizes do not fit the shot");
-            bands.push_back({begin, end, files.size() - 1});
-        } catch (const nlohmann::json::exception& error) {
-            throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
-        }
-    }
-    check_row_coverage(bands, files, height, "statistics");
+            return header.at("frames").get<int>() == frames &&
+                   header.at("block_rows").get<int>() == denoise::kStageBlockRows &&
+                   static_cast<int>(header.at("blocks").size()) == blocks &&
+                   header.at("doubles").get<std::size_t>() == blocks * gram_doubles(frames);
+        });
     task.gram_blocks.clear();
     task.outliers = {};
     for (const RowBand& band : bands) {
@@ -350,7 +378,7 @@ std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& so
         throw internal_error("modes_bytes: a modes task has one band");
     const denoise::ModesBand& band = task.modes.front();
     nlohmann::ordered_json header = header_for(denoise::Stage::Modes, fingerprint, 0);
-    header["solve"] = solve_digest(solve);
+    header["solve"] = digest_of(solve.bytes);
     header["surveys"] = surveys;
     header["rows"] = {band.row_begin, band.row_end};
     header["residual_modes"] = band.residual_modes;
@@ -373,32 +401,18 @@ void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, 
 {
     if (inputs.empty())
         throw usage_error("--stage write needs the modes files of the shot: --modes FILE...");
-    const std::string digest = solve_digest(solve);
-    std::vector<StageFile> files;
-    std::vector<RowBand> bands;
-    for (const StageBytes& input : inputs) {
-        const std::string& path = input.name;
-        files.push_back(parse_stage_file(path, input.bytes, denoise::Stage::Modes, fingerprint));
-        const nlohmann::json& header = files.back().header;
-        try {
-            if (header.at("solve").get<std::string>() != digest)
-                throw bad_input(path, fmt::format("was made from another solve file than {}", solve.name));
+    const auto [files, bands] = read_row_files(
+        inputs, denoise::Stage::Modes, fingerprint, height, "modes", &solve,
+        [&](const std::string& path, const nlohmann::json& header, int begin, int end) {
             if (header.at("surveys").get<std::string>() != surveys)
                 throw bad_input(path, "was made from other survey sums than the survey files given");
-            const int begin = header.at("rows").at(0).get<int>(), end = header.at("rows").at(1).get<int>();
-            const std::size_t samples = static_cast<std::size_t>(width) * channels * std::max(0, end - begin);
-            const std::size_t floats =
-                samples * (header.at("residual_modes").get<std::size_t>() + header.at("output_modes").get<std::size_t>() + 1) +
-                samples / channels * header.at("gain_modes").get<std::size_t>();
-            if (begin < 0 || end > height || begin >= end || header.value("floats", std::size_t(0)) != floats ||
-                header.at("doubles").get<std::size_t>() != 3 * header.at("patches").get<std::size_t>())
-                throw bad_input(path, "damaged modes file: its sizes do not fit the shot");
-            bands.push_back({begin, end, files.size() - 1});
-        } catch (const nlohmann::json::exception& error) {
-            throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
-        }
-    }
-    check_row_coverage(bands, files, height, "modes");
+            const std::size_t samples = static_cast<std::size_t>(width) * channels * (end - begin);
+            const std::size_t floats = samples * (header.at("residual_modes").get<std::size_t>() +
+                                                  header.at("output_modes").get<std::size_t>() + 1) +
+                                       samples / channels * header.at("gain_modes").get<std::size_t>();
+            return header.value("floats", std::size_t(0)) == floats &&
+                   header.at("doubles").get<std::size_t>() == 3 * header.at("patches").get<std::size_t>();
+        });
     task.modes.clear();
     for (const RowBand& row_band : bands) {
         const StageFile& file = files[row_band.file];
@@ -431,7 +445,7 @@ void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, 
 std::string survey_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const denoise::StageTask& task)
 {
     nlohmann::ordered_json header = header_for(denoise::Stage::Survey, fingerprint, 0);
-    header["solve"] = solve_digest(solve);
+    header["solve"] = digest_of(solve.bytes);
     header["rows"] = {task.row_begin, task.row_end};
     const std::size_t length = task.survey_rows.empty() ? 0 : task.survey_rows.front().size();
     header["survey_row_length"] = length;
@@ -450,28 +464,16 @@ void read_surveys(const std::vector<StageBytes>& inputs, const StageBytes& solve
 {
     if (inputs.empty())
         throw usage_error("the modes and write stages need the survey files of the shot: --survey FILE...");
-    const std::string digest = solve_digest(solve);
-    std::vector<StageFile> files;
-    std::vector<RowBand> bands;
-    for (const StageBytes& input : inputs) {
-        const std::string& path = input.name;
-        files.push_back(parse_stage_file(path, input.bytes, denoise::Stage::Survey, fingerprint));
-        const nlohmann::json& header = files.back().header;
-        try {
-            if (header.at("solve").get<std::string>() != digest)
-                throw bad_input(path, fmt::format("was made from another solve file than {}", solve.name));
-            const int begin = header.at("rows").at(0).get<int>(), end = header.at("rows").at(1).get<int>();
+    std::optional<std::size_t> first_length;  // every file of a job surveys the same modes
+    const auto [files, bands] = read_row_files(
+        inputs, denoise::Stage::Survey, fingerprint, height, "survey", &solve,
+        [&](const std::string&, const nlohmann::json& header, int begin, int end) {
             const std::size_t length = header.at("survey_row_length").get<std::size_t>();
-            const std::size_t rows = length == 0 ? 0 : static_cast<std::size_t>(std::max(0, end - begin));
-            if (begin < 0 || end > height || begin >= end || header.at("doubles").get<std::size_t>() != rows * length ||
-                (!files.empty() && length != files.front().header.at("survey_row_length").get<std::size_t>()))
-                throw bad_input(path, "damaged survey file: its sizes do not fit the shot");
-            bands.push_back({begin, end, files.size() - 1});
-        } catch (const nlohmann::json::exception& error) {
-            throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
-        }
-    }
-    check_row_coverage(bands, files, height, "survey");
+            if (!first_length)
+                first_length = length;
+            const std::size_t rows = length == 0 ? 0 : static_cast<std::size_t>(end - begin);
+            return header.at("doubles").get<std::size_t>() == rows * length && length == *first_length;
+        });
     task.survey_rows.clear();
     for (const RowBand& band : bands) {
         const StageFile& file = files[band.file];
@@ -493,7 +495,7 @@ std::string survey_digest(const std::vector<std::vector<double>>& rows)
     std::string all;
     for (const std::vector<double>& row : rows)
         all.append(reinterpret_cast<const char*>(row.data()), row.size() * sizeof(double));
-    return solve_digest({"", all});
+    return digest_of(all);
 }
 
 }  // namespace modestack::app
