@@ -32,50 +32,30 @@ public:
     std::vector<StageBytes> gather(const std::string& mine) const
     {
         int length = static_cast<int>(mine.size());
-        std::vector<int> lengths(m_size), offsets(m_size);
+        std::vector<int> lengths(m_size), offsets;
         MPI_Gather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
         std::string all;
-        if (m_rank == 0) {
-            long long total = 0;
-            for (int r = 0; r < m_size; ++r) {
-                offsets[r] = static_cast<int>(total);
-                total += lengths[r];
-            }
-            if (total > 2'000'000'000)
-                throw bad_input("mpirun", "the ranks' statistics exceed 2 GB: use fewer ranks");
-            all.resize(static_cast<size_t>(total));
-        }
+        if (m_rank == 0)
+            all.resize(offsets_of(lengths, "the ranks' statistics exceed 2 GB: use fewer ranks", offsets));
         MPI_Gatherv(mine.data(), length, MPI_BYTE, all.data(), lengths.data(), offsets.data(), MPI_BYTE, 0,
                     MPI_COMM_WORLD);
-        std::vector<StageBytes> gathered;
-        if (m_rank == 0)
-            for (int r = 0; r < m_size; ++r)
-                if (lengths[r] > 0)
-                    gathered.push_back({fmt::format("the statistics of rank {}", r), all.substr(offsets[r], lengths[r])});
-        return gathered;
+        return m_rank == 0 ? split(all, lengths, offsets, "statistics") : std::vector<StageBytes>{};
     }
 
     /// Every rank's `mine` at every rank, in rank order (`what` names them in errors).
     std::vector<StageBytes> all_gather(const std::string& mine, const std::string& what) const
     {
         int length = static_cast<int>(mine.size());
-        std::vector<int> lengths(m_size), offsets(m_size);
+        std::vector<int> lengths(m_size), offsets;
         MPI_Allgather(&length, 1, MPI_INT, lengths.data(), 1, MPI_INT, MPI_COMM_WORLD);
-        long long total = 0;
-        for (int r = 0; r < m_size; ++r) {
-            offsets[r] = static_cast<int>(total);
-            total += lengths[r];
-        }
-        if (total > 2'000'000'000)
-            throw bad_input("mpirun", fmt::format("the ranks' {} exceed 2 GB: use the farm stages (--stage) with files",
-                                                  what));
-        std::string all(static_cast<size_t>(total), '\0');
+        std::string all(offsets_of(lengths,
+                                   fmt::format("the ranks' {} exceed 2 GB: use the farm stages (--stage) with files",
+                                               what),
+                                   offsets),
+                        '\0');
         MPI_Allgatherv(mine.data(), length, MPI_BYTE, all.data(), lengths.data(), offsets.data(), MPI_BYTE,
                        MPI_COMM_WORLD);
-        std::vector<StageBytes> gathered;
-        for (int r = 0; r < m_size; ++r)
-            gathered.push_back({fmt::format("the {} of rank {}", what, r), all.substr(offsets[r], lengths[r])});
-        return gathered;
+        return split(all, lengths, offsets, what);
     }
 
     /// Rank 0's `bytes` at every rank.
@@ -97,6 +77,33 @@ public:
     }
 
 private:
+    // Where each rank's bytes start in a gathered buffer (into `offsets`); returns
+    // their total. MPI counts bytes in int: beyond 2 GB the job fails with `too_large`.
+    static std::size_t offsets_of(const std::vector<int>& lengths, const std::string& too_large,
+                                  std::vector<int>& offsets)
+    {
+        long long total = 0;
+        offsets.clear();
+        for (int length : lengths) {
+            offsets.push_back(static_cast<int>(total));
+            total += length;
+        }
+        if (total > 2'000'000'000)
+            throw bad_input("mpirun", too_large);
+        return static_cast<std::size_t>(total);
+    }
+
+    // Each rank's non-empty part of a gathered buffer, named "the <what> of rank r".
+    static std::vector<StageBytes> split(const std::string& all, const std::vector<int>& lengths,
+                                         const std::vector<int>& offsets, const std::string& what)
+    {
+        std::vector<StageBytes> parts;
+        for (std::size_t r = 0; r < lengths.size(); ++r)
+            if (lengths[r] > 0)
+                parts.push_back({fmt::format("the {} of rank {}", what, r), all.substr(offsets[r], lengths[r])});
+        return parts;
+    }
+
     int m_rank = 0;
     int m_size = 1;
 };
