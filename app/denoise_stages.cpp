@@ -44,6 +44,30 @@ std::pair<int, int> share_of(int items, int index, int count)
     return {at(index - 1), at(index)};
 }
 
+// Rows [begin, end) of --rows `text` in a shot of `height` rows: Y0-Y1
+// (inclusive), or share I of K of the shot's units of `unit_rows` rows (1, or
+// the statistics' blocks).
+std::pair<int, int> parse_rows(const std::string& text, int height, int unit_rows)
+{
+    int index = 0, count = 0;
+    std::smatch match;
+    if (parse_share(text, "--rows", index, count)) {
+        const int units = (height + unit_rows - 1) / unit_rows;
+        if (count > units)
+            throw usage_error(unit_rows == 1
+                                  ? fmt::format("--rows {}: the shot has {} rows, fewer than {} tasks", text, height,
+                                                count)
+                                  : fmt::format("--rows {}: the shot's {} rows make {} blocks of {}, fewer than {} "
+                                                "tasks",
+                                                text, height, units, unit_rows, count));
+        auto [begin, end] = share_of(units, index, count);
+        return {begin * unit_rows, std::min(height, end * unit_rows)};
+    }
+    if (std::regex_match(text, match, std::regex(R"((\d+)-(\d+))")))
+        return {std::stoi(match[1]), std::stoi(match[2]) + 1};
+    throw usage_error(fmt::format("--rows '{}': write Y0-Y1 or I/K", text));
+}
+
 // The options that must agree between the tasks of a job: those given on the
 // command line, but not where the files are, what the task does, how fast or
 // how verbosely (none of which change a bit of the result).
@@ -177,53 +201,20 @@ void StageRun::prepare(const io::FrameSequence& input, const io::SequenceReader&
 {
     m_fingerprint = {shot_json(input, reader), method_options_given(m_command)};
     const int height = reader.height(), frames = static_cast<int>(input.frames.size());
-    const int blocks = denoise::stage_blocks(height);
     switch (m_task.stage) {
     case denoise::Stage::Survey:
-    case denoise::Stage::Modes: {  // any rows: their sums and images do not depend on the bands
-        int index = 0, count = 0;
-        std::smatch match;
-        if (parse_share(m_options.rows, "--rows", index, count)) {
-            if (count > height)
-                throw usage_error(fmt::format("--rows {}: the shot has {} rows, fewer than {} tasks", m_options.rows,
-                                              height, count));
-            std::tie(m_task.row_begin, m_task.row_end) = share_of(height, index, count);
-        } else if (std::regex_match(m_options.rows, match, std::regex(R"((\d+)-(\d+))"))) {
-            m_task.row_begin = std::stoi(match[1]);
-            m_task.row_end = std::stoi(match[2]) + 1;
-            if (m_task.row_begin >= m_task.row_end || m_task.row_end > height)
-                throw usage_error(fmt::format("--rows {}: the shot has rows 0-{}", m_options.rows, height - 1));
-        } else {
-            throw usage_error(fmt::format("--rows '{}': write Y0-Y1 or I/K", m_options.rows));
-        }
+    case denoise::Stage::Modes:  // any rows: their sums and images do not depend on the bands
+        std::tie(m_task.row_begin, m_task.row_end) = parse_rows(m_options.rows, height, 1);
+        // Checked here too, before any input is read (the engine checks again).
+        denoise::check_task_rows(m_task.row_begin, m_task.row_end, height);
         read_solve(m_solve, m_fingerprint, m_task);
         if (m_task.stage == denoise::Stage::Modes)
             read_surveys(m_surveys, m_solve, m_fingerprint, height, m_task);
         break;
-    }
-    case denoise::Stage::Statistics: {
-        int index = 0, count = 0, first = 0, last = 0;
-        std::smatch match;
-        if (parse_share(m_options.rows, "--rows", index, count)) {
-            if (count > blocks)
-                throw usage_error(fmt::format("--rows {}: the shot's {} rows make {} blocks of {}, fewer than {} "
-                                              "tasks",
-                                              m_options.rows, height, blocks, denoise::kStageBlockRows, count));
-            auto [begin, end] = share_of(blocks, index, count);
-            first = begin * denoise::kStageBlockRows;
-            last = std::min(height, end * denoise::kStageBlockRows) - 1;
-        } else if (std::regex_match(m_options.rows, match, std::regex(R"((\d+)-(\d+))"))) {
-            first = std::stoi(match[1]);
-            last = std::stoi(match[2]);
-        } else {
-            throw usage_error(fmt::format("--rows '{}': write Y0-Y1 or I/K", m_options.rows));
-        }
-        // Checked here too, before any input is read (the engine checks again).
-        denoise::check_statistics_rows(first, last + 1, height);
-        m_task.row_begin = first;
-        m_task.row_end = last + 1;
+    case denoise::Stage::Statistics:
+        std::tie(m_task.row_begin, m_task.row_end) = parse_rows(m_options.rows, height, denoise::kStageBlockRows);
+        denoise::check_statistics_rows(m_task.row_begin, m_task.row_end, height);
         break;
-    }
     case denoise::Stage::Solve:
         read_statistics(m_statistics, m_fingerprint, height, frames, m_task);
         break;

@@ -136,10 +136,8 @@ private:
             throw internal_error("the solve stage needs every block's sums");
         const bool after_solve =
             task.stage == Stage::Survey || task.stage == Stage::Modes || task.stage == Stage::Write;
-        const bool by_rows = task.stage == Stage::Survey || task.stage == Stage::Modes;
-        if (by_rows && (task.row_begin < 0 || task.row_begin >= task.row_end || task.row_end > m_shape.height))
-            throw usage_error(fmt::format("--rows {}-{}: the shot has rows 0-{}", task.row_begin, task.row_end - 1,
-                                          m_shape.height - 1));
+        if (task.stage == Stage::Survey || task.stage == Stage::Modes)
+            check_task_rows(task.row_begin, task.row_end, m_shape.height);
         if (after_solve && m_settings.non_negative == NonNegativeMode::KeepSum)
             throw usage_error(fmt::format("--stage {} cannot be combined with --non-negative-mode keep-sum: it "
                                           "needs every frame of a pixel; use clamp or run on one machine",
@@ -619,10 +617,10 @@ private:
     // Pass 2 up to the frames, for rows [row, end) of `data` (a band with its halo):
     // the coefficients (valid rows filtered and shrunk, halo rows as projected), the
     // unfiltered rebuild of the whole band (sigma's residual), s² and the kept-noise
-    // gains of the valid rows. `residual` (optional) receives the valid rows' N
-    // unfiltered coefficient images before the filter changes them.
-    void prepare_band(const Band& data, int row, int end, const RebuildBasis& modes, std::vector<float>* residual,
-                      std::vector<float>* ranks)
+    // gains of the valid rows. `residual` (optional; valid rows × N modes) receives
+    // the valid rows' unfiltered coefficient images before the filter changes them.
+    void prepare_band(const Band& data, int row, int end, const RebuildBasis& modes,
+                      const lowrank::MutableBandView* residual, std::vector<float>* ranks)
     {
         const int frames = m_shape.frames;
         const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
@@ -635,9 +633,9 @@ private:
         lowrank::rebuild_from_coefficients({m_coefficients.data(), data.rows, modes.rank, data.rows},
                                            modes.temporal_rank, {m_rebuilt.data(), data.rows, frames, data.rows});
         if (residual) {
-            residual->resize(static_cast<size_t>(valid) * modes.rank);
             for (int j = 0; j < modes.rank; ++j)
-                std::copy_n(m_coefficients.begin() + j * data.rows + offset, valid, residual->begin() + j * valid);
+                std::copy_n(m_coefficients.begin() + j * data.rows + offset, valid,
+                            residual->data + j * residual->frame_stride);
         }
         lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
         m_noise_variance.resize(static_cast<size_t>(valid));
@@ -764,18 +762,17 @@ private:
                                      m_shape.frames),
                          task.row_end - task.row_begin);
         Band band;
-        std::vector<float> residual;
         for (int row = task.row_begin; row < task.row_end; row += m_report.plan.band_rows) {
             const int end = std::min(task.row_end, row + m_report.plan.band_rows);
             m_patches = {row, end, task.row_begin, &result.patches};
             read_task_band(band, row, end);
             m_patches = {};
-            prepare_band(band, row, end, modes, &residual, nullptr);
-            // Copy the band's own rows into the task's images, mode by mode.
+            // The band's own rows go into the task's images, mode by mode.
             const std::int64_t valid = (end - row) * row_samples, first = (row - task.row_begin) * row_samples;
             const std::int64_t offset = (row - band.row_begin) * row_samples;
-            for (int j = 0; j < result.residual_modes; ++j)
-                std::copy_n(residual.begin() + j * valid, valid, result.residual.begin() + j * samples + first);
+            const lowrank::MutableBandView residual{result.residual.data() + first, valid, result.residual_modes,
+                                                    samples};
+            prepare_band(band, row, end, modes, &residual, nullptr);
             for (int j = 0; j < result.output_modes; ++j)
                 std::copy_n(m_coefficients.begin() + j * band.rows + offset, valid,
                             result.output.begin() + j * samples + first);

@@ -26,4 +26,10 @@ void check_statistics_rows(int row_begin, int row_end, int height)
                                       row_begin, row_end - 1, kStageBlockRows, height - 1, kStageBlockRows, height));
 }
 
+void check_task_rows(int row_begin, int row_end, int height)
+{
+    if (row_begin < 0 || row_begin >= row_end || row_end > height)
+        throw usage_error(fmt::format("--rows {}-{}: the shot has rows 0-{}", row_begin, row_end - 1, height - 1));
+}
+
 }  // namespace modestack::denoise

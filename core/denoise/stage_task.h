@@ -45,6 +45,10 @@ inline int stage_blocks(int rows) { return (rows + kStageBlockRows - 1) / kStage
 /// rows are whole blocks: what a statistics task may cover.
 void check_statistics_rows(int row_begin, int row_end, int height);
 
+/// Throws a usage error unless rows [row_begin, row_end) lie in a shot of
+/// `height` rows: what a survey or modes task may cover.
+void check_task_rows(int row_begin, int row_end, int height);
+
 /// A modes task's result for rows [row_begin, row_end) of the shot: everything a
 /// write task needs of those rows besides the frames it writes. Samples are
 /// [row][x][channel] from the band's first row; images of several modes follow
