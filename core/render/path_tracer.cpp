@@ -129,8 +129,11 @@ float LightSet::area_pdf(int mesh_index, int triangle_index) const
     return m_select_pdf[index] > 0 ? m_select_pdf[index] / m_triangles[index].area : 0;
 }
 
-PathSample trace_path(const TraceContext& context, Vec3 origin, Vec3 direction, const PixelSampler& sampler,
-                      std::uint32_t sample_index)
+namespace {
+
+// The path of trace_path (start == nullptr) or trace_from_surface.
+PathSample trace(const TraceContext& context, Vec3 origin, Vec3 direction, const SurfaceStart* start,
+                 const PixelSampler& sampler, std::uint32_t sample_index)
 {
     PathSample result;
     Vec3 throughput{1, 1, 1};
@@ -141,10 +144,21 @@ PathSample trace_path(const TraceContext& context, Vec3 origin, Vec3 direction, 
     };
     for (int vertex = 0;; ++vertex) {
         RayHit hit;
-        ++result.rays;
-        if (!context.rays->intersect(origin, direction, std::numeric_limits<float>::infinity(), hit))
-            break;
+        const bool on_start = vertex == 0 && start != nullptr;
+        if (on_start) {
+            hit.mesh_index = start->mesh_index;
+            hit.triangle_index = start->triangle_index;
+            hit.geometric_normal = start->normal;
+            origin = start->point;
+            direction = -start->normal; // seen head-on from the front
+        } else {
+            ++result.rays;
+            if (!context.rays->intersect(origin, direction, std::numeric_limits<float>::infinity(), hit))
+                break;
+        }
         const scene::Material& material = context.scene->meshes[hit.mesh_index].material;
+        // A baked point weighs the light arriving at it, not what it reflects.
+        const Vec3 albedo = on_start ? Vec3{1, 1, 1} : material.albedo;
         Vec3 point = origin + direction * hit.distance;
         float cos_front = -scene::dot(hit.geometric_normal, direction);
         bool front_side = cos_front > 0;
@@ -155,6 +169,10 @@ PathSample trace_path(const TraceContext& context, Vec3 origin, Vec3 direction, 
             result.normal = normal;
             result.position = point;
             result.depth = hit.distance * scene::dot(direction, context.camera_forward);
+            result.mesh_index = hit.mesh_index;
+            result.triangle_index = hit.triangle_index;
+            result.b1 = hit.b1;
+            result.b2 = hit.b2;
         }
         if (front_side && material.is_emissive()) {
             if (vertex == 0) {
@@ -172,7 +190,7 @@ PathSample trace_path(const TraceContext& context, Vec3 origin, Vec3 direction, 
         // Pairs per vertex: (light choice, roulette), light point, BSDF direction.
         std::uint32_t first_pair = 1 + 3 * static_cast<std::uint32_t>(vertex);
         Sample2 choice = sampler.get_2d(sample_index, first_pair);
-        Vec3 brdf = material.albedo * kInversePi;
+        Vec3 brdf = albedo * kInversePi;
         Vec3 offset_origin = point + normal * kSurfaceOffset;
 
         if (!context.lights->empty()) {
@@ -200,7 +218,7 @@ PathSample trace_path(const TraceContext& context, Vec3 origin, Vec3 direction, 
         previous_bsdf_pdf = std::max(scene::dot(normal, direction), 0.0f) * kInversePi;
         if (previous_bsdf_pdf <= 0)
             break;
-        throughput = throughput * material.albedo;
+        throughput = throughput * albedo;
         origin = offset_origin;
         if (vertex + 1 >= kRouletteStartVertex) {
             float survive = std::min(scene::max_component(throughput), 0.95f);
@@ -210,6 +228,20 @@ PathSample trace_path(const TraceContext& context, Vec3 origin, Vec3 direction, 
         }
     }
     return result;
+}
+
+} // namespace
+
+PathSample trace_path(const TraceContext& context, Vec3 origin, Vec3 direction, const PixelSampler& sampler,
+                      std::uint32_t sample_index)
+{
+    return trace(context, origin, direction, nullptr, sampler, sample_index);
+}
+
+PathSample trace_from_surface(const TraceContext& context, const SurfaceStart& start, const PixelSampler& sampler,
+                              std::uint32_t sample_index)
+{
+    return trace(context, start.point, -start.normal, &start, sampler, sample_index);
 }
 
 } // namespace modestack::render

@@ -52,6 +52,9 @@ struct PathSample {
     scene::Vec3 normal;    ///< unit normal of the first hit, facing the camera
     scene::Vec3 position;  ///< first hit, world space
     float depth = 0;       ///< first hit's distance along the camera's view axis
+    int mesh_index = -1;   ///< first hit's mesh
+    int triangle_index = -1; ///< first hit's triangle within the mesh
+    float b1 = 0, b2 = 0;  ///< first hit's barycentric weights of the triangle's 2nd and 3rd vertices
     std::int64_t rays = 0; ///< rays cast for this sample
 };
 
@@ -68,5 +71,21 @@ struct TraceContext {
 /// Uses dimension pairs 1, 2, 3, ... of `sampler` (pair 0 is the pixel position).
 PathSample trace_path(const TraceContext& context, scene::Vec3 origin, scene::Vec3 direction,
                       const PixelSampler& sampler, std::uint32_t sample_index);
+
+/// A path that starts on a known surface point instead of at the camera: the
+/// bake of object-space points (surface_points.h). The point is vertex 0, seen
+/// from the front side of its triangle, with albedo 1, so `direct` and `indirect`
+/// are the light arriving there (as DiffDir and DiffInd hold it).
+struct SurfaceStart {
+    scene::Vec3 point;
+    scene::Vec3 normal; ///< the triangle's unit front normal
+    int mesh_index = -1;
+    int triangle_index = -1;
+};
+
+/// Traces sample `sample_index` of a path from `start`; uses the same dimension
+/// pairs as trace_path.
+PathSample trace_from_surface(const TraceContext& context, const SurfaceStart& start, const PixelSampler& sampler,
+                              std::uint32_t sample_index);
 
 } // namespace modestack::render

@@ -114,6 +114,8 @@ bool RayScene::intersect(scene::Vec3 origin, scene::Vec3 direction, float max_di
     hit.mesh_index = static_cast<int>(query.hit.geomID);
     hit.triangle_index = static_cast<int>(query.hit.primID);
     hit.geometric_normal = m_impl->triangle_normals[query.hit.geomID][query.hit.primID];
+    hit.b1 = query.hit.u;  // Embree's u, v weigh the triangle's vertices 1 and 2
+    hit.b2 = query.hit.v;
     return true;
 }
 

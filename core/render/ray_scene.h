@@ -16,6 +16,7 @@ struct RayHit {
     int mesh_index = -1;          ///< index into Scene::meshes
     int triangle_index = -1;      ///< triangle within that mesh
     scene::Vec3 geometric_normal; ///< unit normal of the triangle, front side (winding order)
+    float b1 = 0, b2 = 0;         ///< barycentric weights of the triangle's 2nd and 3rd vertices
 };
 
 /// An Embree scene built from a scene::Scene. Queries are thread-safe.
