@@ -25,6 +25,12 @@
 //                        the per-sample estimates divided by spp): the squared noise
 //                        level a denoiser can use; 0 at 1 spp (unknown)
 //   Rendered.V           1 where the pixel was rendered, 0 where a mask left it out
+//   PointLookup.{I0..I3,W0..W3}  only when rendering for object space: the ids of
+//                        the (up to) four surface points (surface_points.h) whose
+//                        weighted sum Σ Wk·value(Ik) gives the pixel's DiffInd, the
+//                        weights summing to 1 (0 where no sample saw any albedo);
+//                        unused slots have I = −1, W = 0. Ids are exact in float
+//                        (fewer than 2^24 points).
 // All layers are box-filtered averages over the pixel's samples.
 #pragma once
 
@@ -72,10 +78,12 @@ struct FrameAovs {
     AovImage position;          ///< Position, XYZ
     AovImage indirect_variance; ///< DiffIndVar, RGB
     AovImage rendered;          ///< Rendered, one channel: 1 rendered, 0 masked out
+    AovImage point_lookup;      ///< PointLookup: 4 ids then 4 weights; empty unless asked for
     RenderStats stats;
 
-    /// Sizes every buffer for width × height and fills them with zeros.
-    void reset(int width, int height);
+    /// Sizes every buffer for width × height and fills them with zeros; the point
+    /// lookup only when `with_point_lookup` (else it is left empty).
+    void reset(int width, int height, bool with_point_lookup = false);
 };
 
 /// One layer of FrameAovs with its suggested EXR names.
@@ -85,7 +93,11 @@ struct AovLayer {
     const AovImage* image;                  ///< the buffer (channels = channel_names.size())
 };
 
-/// The layers of `aovs` in a fixed order (Combined first), for writers.
+/// Points per pixel in the PointLookup layer.
+inline constexpr int kLookupPoints = 4;
+
+/// The layers of `aovs` in a fixed order (Combined first), for writers; PointLookup
+/// last, only when it was rendered.
 std::vector<AovLayer> aov_layers(const FrameAovs& aovs);
 
 } // namespace modestack::render

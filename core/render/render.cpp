@@ -12,6 +12,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <limits>
@@ -61,9 +62,45 @@ float divide_or_zero(double light, double albedo)
     return albedo > 0 ? static_cast<float>(light / albedo) : 0.0f;
 }
 
-void render_pixel(const TraceContext& context, const Camera& camera, const RenderOptions& options, int frame,
-                  int x, int y, FrameAovs& out, std::int64_t& rays)
+// Adds `weight` × the points around a sample's hit to a pixel's list of points.
+void add_lookup(const SurfacePoints& points, const PathSample& path, float weight, std::vector<PointWeight>& list)
 {
+    PointWeight corners[3];
+    points.interpolate(path.mesh_index, path.triangle_index, path.b1, path.b2, corners);
+    for (const PointWeight& corner : corners) {
+        if (corner.weight <= 0)
+            continue;
+        auto found = std::find_if(list.begin(), list.end(),
+                                  [&](const PointWeight& entry) { return entry.id == corner.id; });
+        if (found != list.end())
+            found->weight += corner.weight * weight;
+        else
+            list.push_back({corner.id, corner.weight * weight});
+    }
+}
+
+// The kLookupPoints heaviest points of a pixel, weights renormalised to sum to 1
+// (ties broken by id, so the result does not depend on the order samples came in).
+void store_lookup(std::vector<PointWeight>& list, float* lookup)
+{
+    std::sort(list.begin(), list.end(), [](const PointWeight& a, const PointWeight& b) {
+        return a.weight != b.weight ? a.weight > b.weight : a.id < b.id;
+    });
+    const std::size_t kept = std::min<std::size_t>(list.size(), kLookupPoints);
+    double total = 0;
+    for (std::size_t k = 0; k < kept; ++k)
+        total += list[k].weight;
+    for (int k = 0; k < kLookupPoints; ++k) {
+        bool used = static_cast<std::size_t>(k) < kept && total > 0;
+        lookup[k] = used ? static_cast<float>(list[k].id) : -1.0f;
+        lookup[kLookupPoints + k] = used ? static_cast<float>(list[k].weight / total) : 0.0f;
+    }
+}
+
+void render_pixel(const TraceContext& context, const Camera& camera, const RenderOptions& options, int frame,
+                  int x, int y, const SurfacePoints* points, FrameAovs& out, std::int64_t& rays)
+{
+    std::vector<PointWeight> lookup;
     PixelSampler sampler(options.seed, frame, options.fixed_seed, x, y);
     Sum3 emitted, direct, indirect, albedo, normal, position, indirect_squared;
     double depth = 0, hits = 0;
@@ -88,7 +125,12 @@ void render_pixel(const TraceContext& context, const Camera& camera, const Rende
         position.add(path.position);
         depth += path.depth;
         indirect_squared.add(path.indirect * path.indirect);
+        // DiffInd weighs each sample's light by its albedo (see below): so do the points.
+        if (points != nullptr)
+            add_lookup(*points, path, (path.albedo.x + path.albedo.y + path.albedo.z) / 3, lookup);
     }
+    if (points != nullptr)
+        store_lookup(lookup, out.point_lookup.at(x, y));
     const double n = options.spp;
     auto store = [](float* pixel, const Sum3& sum, double divisor) {
         pixel[0] = static_cast<float>(sum.r / divisor);
@@ -150,11 +192,13 @@ int tile_count(const RenderOptions& options)
 }
 
 void render_frame(const scene::Scene& scene, int frame, const RenderOptions& options,
-                  const std::uint8_t* mask, FrameAovs& out, Progress& progress)
+                  const std::uint8_t* mask, FrameAovs& out, Progress& progress, const SurfacePoints* points)
 {
     validate_render_options(options);
+    if (points != nullptr)
+        points->check_topology(scene, "frame " + std::to_string(frame));
     auto start = std::chrono::steady_clock::now();
-    out.reset(options.width, options.height);
+    out.reset(options.width, options.height, points != nullptr);
     RayScene ray_scene(scene);
     LightSet lights(scene);
     Camera camera = make_camera(scene.camera, options);
@@ -174,7 +218,7 @@ void render_frame(const scene::Scene& scene, int frame, const RenderOptions& opt
                 for (int x = x0; x < x1; ++x) {
                     if (mask != nullptr && mask[static_cast<std::size_t>(y) * options.width + x] == 0)
                         continue;
-                    render_pixel(context, camera, options, frame, x, y, out, tile_rays[tile]);
+                    render_pixel(context, camera, options, frame, x, y, points, out, tile_rays[tile]);
                     tile_paths[tile] += options.spp;
                 }
             progress.advance(1);

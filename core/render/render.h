@@ -8,6 +8,7 @@
 
 #include "core/common/progress.h"
 #include "core/render/aov.h"
+#include "core/render/surface_points.h"
 #include "core/scene/scene.h"
 
 #include <cstdint>
@@ -42,8 +43,11 @@ int tile_count(const RenderOptions& options);
 /// cancel_requested() before each tile and throws cancelled_error() (from
 /// core/common/error.h) if the frame was left incomplete. Does not call
 /// progress.begin()/end().
+/// `points`: when given (object space), also fills out.point_lookup with the
+/// surface points each pixel's samples saw; `scene` must have their topology.
 /// Throws a usage error for bad options, a bad-input error for a broken scene.
 void render_frame(const scene::Scene& scene, int frame, const RenderOptions& options,
-                  const std::uint8_t* mask, FrameAovs& out, Progress& progress);
+                  const std::uint8_t* mask, FrameAovs& out, Progress& progress,
+                  const SurfacePoints* points = nullptr);
 
 } // namespace modestack::render
