@@ -124,6 +124,30 @@ Scene make_spin(int frame)
     return scene;
 }
 
+// The camera walks in through the front of the room, past the short box and
+// round towards the back left, while the light's colour and strength change and
+// the short box turns: every pixel sees different surfaces from frame to frame.
+Scene make_flythrough(int frame)
+{
+    Scene scene = make_lit_room();
+    float t = static_cast<float>(frame - kFirstFrame) / static_cast<float>(kLastFrame - kFirstFrame);
+    float ease = t * t * (3 - 2 * t);
+    auto mix = [ease](Vec3 a, Vec3 b) { return a * (1 - ease) + b * ease; };
+    scene.camera.position = mix({0.6f, 1.35f, 2.45f}, {-0.55f, 0.9f, 0.95f});
+    scene.camera.look_at = mix({-0.25f, 0.55f, -0.6f}, {0.5f, 0.45f, -0.55f});
+    scene.camera.vertical_fov_degrees = 55;
+    scene.meshes.push_back(
+        make_box("tall box", {-0.38f, 0, -0.35f}, {0.55f, 1.2f, 0.55f}, 0.3f, white_material()));
+    scene.meshes.push_back(make_box("short box", {0.4f, 0, 0.2f}, {0.55f, 0.55f, 0.55f}, -0.3f + 0.8f * t,
+                                    white_material()));
+    // Warm and dim to cool and bright and back, one and a half cycles over the shot.
+    float swing = 0.5f - 0.5f * std::cos(3 * kPi * t);
+    Vec3 warm{20.0f, 13.0f, 7.0f}, cool{16.0f, 20.0f, 26.0f};
+    scene.meshes.push_back(make_ceiling_light("light", {0, kLightY, 0.2f}, 0.5f, 0.5f,
+                                              warm * (1 - swing) + cool * swing));
+    return scene;
+}
+
 std::string scene_names()
 {
     std::string names;
@@ -145,6 +169,10 @@ const std::vector<SceneInfo>& builtin_scenes()
          kFirstFrame, kLastFrame},
         {"spin", "a flat box turns half a turn under a fixed light; its shadow sweeps the floor", kFirstFrame,
          kLastFrame},
+        {"flythrough",
+         "the camera moves through the room while the light changes colour and strength and the short box "
+         "turns (object-space denoising)",
+         kFirstFrame, kLastFrame},
     };
     return scenes;
 }
@@ -166,6 +194,8 @@ Scene make_builtin_scene(const std::string& name, int frame)
         return make_orbit(frame);
     if (name == "switch")
         return make_switch(frame);
+    if (name == "flythrough")
+        return make_flythrough(frame);
     return make_spin(frame);
 }
 

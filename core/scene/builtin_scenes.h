@@ -21,7 +21,7 @@ struct SceneInfo {
     int last_frame;          ///< last frame of the shot (inclusive)
 };
 
-/// The built-in scenes, in the order they are listed: static, orbit, switch, spin.
+/// The built-in scenes, in the order they are listed: static, orbit, switch, spin, flythrough.
 const std::vector<SceneInfo>& builtin_scenes();
 
 /// Builds frame `frame` of the built-in scene `name`.

@@ -40,14 +40,15 @@ ErrorKind kind_of_scene_error(const std::string& name, int frame)
 
 } // namespace
 
-TEST_CASE("scenes: the four built-in scenes have 48 frames each")
+TEST_CASE("scenes: the five built-in scenes have 48 frames each")
 {
     const auto& scenes = scene::builtin_scenes();
-    REQUIRE(scenes.size() == 4);
+    REQUIRE(scenes.size() == 5);
     CHECK(scenes[0].name == "static");
     CHECK(scenes[1].name == "orbit");
     CHECK(scenes[2].name == "switch");
     CHECK(scenes[3].name == "spin");
+    CHECK(scenes[4].name == "flythrough");
     for (const auto& info : scenes) {
         CHECK(info.first_frame == 1);
         CHECK(info.last_frame == 48);
@@ -64,7 +65,7 @@ TEST_CASE("scenes: unknown names and frames out of range are usage errors")
         scene::make_builtin_scene("nope", 1);
     } catch (const Error& error) {
         std::string message = error.what();
-        CHECK(message.find("static, orbit, switch, spin") != std::string::npos);
+        CHECK(message.find("static, orbit, switch, spin, flythrough") != std::string::npos);
         CHECK(message.find('\n') == std::string::npos);
     }
     CHECK_THROWS_AS(scene::make_furnace_scene(1.0f, 0.5f), Error);
@@ -139,4 +140,19 @@ TEST_CASE("scenes: switch's crossing box shows in the albedo AOV in frames 30-36
         CHECK_MESSAGE(crossing == (changed > 0),
                       "frame " << frame << ": " << changed << " albedo values changed");
     }
+}
+
+TEST_CASE("scenes: flythrough moves the camera and changes the light, with the same meshes in every frame")
+{
+    scene::Scene first = scene::make_builtin_scene("flythrough", 1);
+    scene::Scene last = scene::make_builtin_scene("flythrough", 48);
+    CHECK(scene::length(first.camera.position - last.camera.position) > 1.0f);
+    REQUIRE(first.meshes.size() == last.meshes.size());
+    for (size_t m = 0; m < first.meshes.size(); ++m)
+        CHECK(first.meshes[m].triangle_count() == last.meshes[m].triangle_count());
+    // The light is warm (red > blue) at the start and cool (blue > red) a third in.
+    scene::Vec3 warm = first.meshes.back().material.emission;
+    scene::Vec3 cool = scene::make_builtin_scene("flythrough", 17).meshes.back().material.emission;
+    CHECK(warm.x > warm.z);
+    CHECK(cool.z > cool.x);
 }
