@@ -10,6 +10,7 @@
 #include "app/memory_budget.h"
 #include "app/method_options.h"
 #include "app/mpi_job.h"
+#include "app/object_space.h"
 #include "app/option_values.h"
 #include "app/report/denoise_report.h"
 #include "app/report/html_report.h"
@@ -57,6 +58,7 @@ struct DenoiseOptions {
     bool skip_existing = false;
     std::string colorspace;
     std::string ocio_config;
+    std::string object_space;  ///< --object-space: the points sequence
     MethodOptions method_options;
     StageOptions stage;
     CommonOptions common;
@@ -115,7 +117,7 @@ denoise::Settings make_settings(const DenoiseOptions& options)
     if (options.mode_filter && options.no_mode_filter)
         throw usage_error("--mode-filter and --no-mode-filter contradict each other: give one");
     // On by default: it won on both shots of the quality benchmark (man page, DENOISE).
-    settings.mode_filter.enabled = !options.no_mode_filter;
+    settings.mode_filter.enabled = !options.no_mode_filter && options.object_space.empty();
     if (settings.mode_filter.enabled && options.rank == "auto" && options.rank_rule != "press")
         throw usage_error(fmt::format("--rank-rule {} needs --no-mode-filter: with the mode filter, --rank auto is "
                                       "chosen by its SURE survey",
@@ -173,6 +175,21 @@ nlohmann::ordered_json mode_filter_json(const denoise::Report& report)
             {"modes", modes}};
 }
 
+// N and why, the spectrum, the temporal modes and the outlier counts of a run.
+void add_modes_json(const denoise::Report& report, nlohmann::ordered_json& json)
+{
+    json["rank"] = {{"n", report.rank.rank},
+                    {"rule", report.rank.rule},
+                    {"reasoning", report.rank.reasoning},
+                    {"score", report.rank.score},
+                    {"noise_floor", report.rank.noise_floor},
+                    {"noise_sigma", report.rank.noise_sigma}};
+    json["singular_values"] = report.singular_values;
+    json["explained_variance"] = report.explained;
+    json["temporal_modes"] = report.temporal_modes;
+    json["outliers"] = {{"non_finite", report.outliers.non_finite}, {"fireflies", report.outliers.fireflies}};
+}
+
 nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::SequenceReader& reader,
                                     const denoise::Report& report, double seconds_total, int frames_written,
                                     std::int64_t max_memory_bytes)
@@ -196,16 +213,7 @@ nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::Seq
     json["passes"] = report.passes;
     json["in_memory"] = report.plan.in_memory;
     json["band_rows"] = report.plan.band_rows;
-    json["rank"] = {{"n", report.rank.rank},
-                    {"rule", report.rank.rule},
-                    {"reasoning", report.rank.reasoning},
-                    {"score", report.rank.score},
-                    {"noise_floor", report.rank.noise_floor},
-                    {"noise_sigma", report.rank.noise_sigma}};
-    json["singular_values"] = report.singular_values;
-    json["explained_variance"] = report.explained;
-    json["temporal_modes"] = report.temporal_modes;
-    json["outliers"] = {{"non_finite", report.outliers.non_finite}, {"fireflies", report.outliers.fireflies}};
+    add_modes_json(report, json);
     json["mode_filter"] = mode_filter_json(report);
     if (report.rank_map.largest_rank > 0)
         json["rank_map"] = {{"file", options.rank_map},
@@ -251,9 +259,86 @@ void write_denoise_report(const DenoiseOptions& options, const io::SequenceReade
     report::publish_report(std::move(data));
 }
 
+// What --object-space cannot be combined with: everything that needs image
+// neighbours or a second pass over files the points job does not have.
+void check_object_space_options(const DenoiseOptions& options)
+{
+    auto refuse = [](const char* option, const char* why) {
+        throw usage_error(fmt::format("--object-space cannot be combined with {}: {}", option, why));
+    };
+    if (!options.stage.stage.empty())
+        refuse("--stage", "the points job runs in one process");
+    if (options.mode_filter)
+        refuse("--mode-filter", "neighbours in a point image are not neighbours on the surfaces");
+    if (!options.rank_map.empty())
+        refuse("--rank-map", "it needs the mode filter");
+    if (!options.save_modes.empty())
+        refuse("--save-modes", "the modes are point images, not frames");
+    if (!options.report_path.empty())
+        refuse("--report", "the report shows image modes");
+    if (!options.colorspace.empty())
+        refuse("--colorspace", "points are baked scene-linear");
+    if (!options.method_options.segments.empty())
+        refuse("--segments", "the points are denoised as one shot");
+    if (options.method_options.transform != "none")
+        refuse("--transform", "the points are denoised as baked");
+}
+
+int run_object_space_denoise(const DenoiseOptions& options, const denoise::Settings& settings,
+                             const io::FrameSequence& input, const std::vector<std::string>& paths, int frames_written,
+                             std::chrono::steady_clock::time_point start, RunContext& context)
+{
+    ObjectSpaceJob job;
+    job.frames = input;
+    job.points = options.object_space;
+    job.layers = options.layers;
+    job.outputs = paths;
+    job.attributes = {
+        io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
+        io::HeaderAttribute::of_text("modestack:command", command_line()),
+        io::HeaderAttribute::of_text("modestack:input", input.printf_pattern),
+        io::HeaderAttribute::of_text("modestack:frames", io::describe_frames(input.frames)),
+    };
+    ObjectSpaceResult result = run_object_space(job, settings, context.progress());
+    const denoise::Report& report = result.report;
+    double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!options.json_path.empty()) {
+        nlohmann::ordered_json json;
+        json["version"] = version_string();
+        json["command"] = command_line();
+        json["input"] = input.printf_pattern;
+        json["output"] = options.output;
+        json["frames"] = io::describe_frames(input.frames);
+        json["frame_count"] = report.shape.frames;
+        json["frames_written"] = frames_written;
+        json["width"] = result.frame_width;
+        json["height"] = result.frame_height;
+        json["object_space"] = {{"points_input", options.object_space},
+                                {"points", result.points},
+                                {"point_image_width", report.shape.width},
+                                {"point_image_height", report.shape.height}};
+        json["solver"] = report.solver;
+        add_modes_json(report, json);
+        json["seconds"] = {{"statistics", report.seconds_statistics},
+                           {"solve", report.seconds_solve},
+                           {"rebuild", report.seconds_rebuild},
+                           {"total", seconds}};
+        json["peak_memory_bytes"] = peak_resident_bytes();
+        io::write_text_file(options.json_path, json.dump(2) + "\n");
+    }
+    if (!options.common.quiet)
+        std::fprintf(stderr, "denoised %d of %d frames in object space (%lld points) with N = %d modes (%s rule, %s "
+                             "solver) in %.2f s\n",
+                     frames_written, report.shape.frames, static_cast<long long>(result.points), report.rank.rank,
+                     report.rank.rule.c_str(), report.solver.c_str(), seconds);
+    return 0;
+}
+
 int run_denoise(const DenoiseOptions& options)
 {
     auto start = std::chrono::steady_clock::now();
+    if (!options.object_space.empty())
+        check_object_space_options(options);
     denoise::Settings settings = make_settings(options);
     const denoise::Transform transform = apply_method_options(options.method_options, settings);
     RunContext context(options.common);
@@ -288,6 +373,27 @@ int run_denoise(const DenoiseOptions& options)
         io::check_outputs({(std::filesystem::path(options.save_modes) / "mode.01.exr").string()}, input.files);
     if (!options.rank_map.empty())
         io::check_outputs({options.rank_map}, input.files);
+    if (!options.object_space.empty()) {
+        std::vector<std::string> inputs = input.files;
+        for (const std::string& file :
+             io::find_input_sequence(options.object_space, io::describe_frames(input.frames)).files)
+            inputs.push_back(file);
+        io::check_outputs(output.files, inputs);
+        std::vector<std::string> paths = output.files;
+        int frames_written = 0;
+        for (std::string& path : paths) {
+            if (options.skip_existing && std::filesystem::exists(path))
+                path.clear();
+            else
+                ++frames_written;
+        }
+        if (frames_written == 0) {
+            context.progress().warn(fmt::format("every output of {} exists already (--skip-existing): nothing to do",
+                                                options.output));
+            return 0;
+        }
+        return run_object_space_denoise(options, settings, input, paths, frames_written, start, context);
+    }
     io::SequenceReader reader(input, options.layers);
     DenoiseColor color = choose_denoise_color(options.ocio_config, options.colorspace, reader);
 
@@ -473,6 +579,11 @@ Subcommand add_denoise_command(CLI::App& parent)
     command->add_option("--ocio-config", options->ocio_config,
                         "OpenColorIO config file; wins over $OCIO, which wins over the config shipped with "
                         "modestack");
+    command->add_option("--object-space", options->object_space,
+                        "Denoise in object space: the points sequence render --points baked (same frames); the "
+                        "points x frames matrix is denoised with the same solver, rank rule and confidence (no mode "
+                        "filter), and each frame's layer is rebuilt from the points its PointLookup layer names. "
+                        "For moving cameras and objects");
     add_method_options(*command, options->method_options);
     add_stage_options(*command, options->stage);
     add_common_options(*command, options->common);
