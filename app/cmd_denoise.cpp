@@ -268,8 +268,6 @@ void check_object_space_options(const DenoiseOptions& options)
     };
     if (!options.stage.stage.empty())
         refuse("--stage", "the points job runs in one process");
-    if (options.mode_filter)
-        refuse("--mode-filter", "neighbours in a point image are not neighbours on the surfaces");
     if (!options.rank_map.empty())
         refuse("--rank-map", "it needs the mode filter");
     if (!options.save_modes.empty())
@@ -293,6 +291,9 @@ int run_object_space_denoise(const DenoiseOptions& options, const denoise::Setti
     job.points = options.object_space;
     job.layers = options.layers;
     job.outputs = paths;
+    job.surface_filter = !options.no_mode_filter;
+    job.filter_widths = options.mode_filter_widths;
+    job.sigma_radius = options.sigma_radius;
     job.attributes = {
         io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
         io::HeaderAttribute::of_text("modestack:command", command_line()),
@@ -317,6 +318,12 @@ int run_object_space_denoise(const DenoiseOptions& options, const denoise::Setti
                                 {"points", result.points},
                                 {"point_image_width", report.shape.width},
                                 {"point_image_height", report.shape.height}};
+        json["surface_filter"] = {{"enabled", !options.no_mode_filter},
+                                  {"width_spacings", result.filter.width},
+                                  {"widths", result.filter.widths},
+                                  {"sure", result.filter.risks},
+                                  {"mean_neighbours", result.filter.mean_neighbours},
+                                  {"reasoning", result.filter.reasoning}};
         json["solver"] = report.solver;
         add_modes_json(report, json);
         json["seconds"] = {{"statistics", report.seconds_statistics},
@@ -328,9 +335,10 @@ int run_object_space_denoise(const DenoiseOptions& options, const denoise::Setti
     }
     if (!options.common.quiet)
         std::fprintf(stderr, "denoised %d of %d frames in object space (%lld points) with N = %d modes (%s rule, %s "
-                             "solver) in %.2f s\n",
+                             "solver), surface filter: %s, in %.2f s\n",
                      frames_written, report.shape.frames, static_cast<long long>(result.points), report.rank.rank,
-                     report.rank.rule.c_str(), report.solver.c_str(), seconds);
+                     report.rank.rule.c_str(), report.solver.c_str(),
+                     options.no_mode_filter ? "off" : result.filter.reasoning.c_str(), seconds);
     return 0;
 }
 
@@ -580,10 +588,11 @@ Subcommand add_denoise_command(CLI::App& parent)
                         "OpenColorIO config file; wins over $OCIO, which wins over the config shipped with "
                         "modestack");
     command->add_option("--object-space", options->object_space,
-                        "Denoise in object space: the points sequence render --points baked (same frames); the "
-                        "points x frames matrix is denoised with the same solver, rank rule and confidence (no mode "
-                        "filter), and each frame's layer is rebuilt from the points its PointLookup layer names. "
-                        "For moving cameras and objects");
+                        "Denoise in object space, for moving cameras and objects: the points sequence render "
+                        "--points baked (same frames) is denoised as points x frames with the same solver and rank "
+                        "rule, filtered over the surfaces instead of the mode filter (SURE width in lattice spacings; "
+                        "--no-mode-filter: off), and each frame's layer is rebuilt from the points its PointLookup "
+                        "layer names");
     add_method_options(*command, options->method_options);
     add_stage_options(*command, options->stage);
     add_common_options(*command, options->common);

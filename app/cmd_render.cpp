@@ -114,7 +114,8 @@ void write_points(const std::string& path, const render::PointBake& bake, const 
     const std::vector<std::string> rgb{"R", "G", "B"};
     std::vector<render::AovLayer> layers{{"DiffInd", rgb, &bake.indirect},
                                          {"DiffIndVar", rgb, &bake.variance},
-                                         {"Position", {"X", "Y", "Z"}, &bake.position}};
+                                         {"Position", {"X", "Y", "Z"}, &bake.position},
+                                         {"Normal", {"X", "Y", "Z"}, &bake.normal}};
     std::vector<io::HeaderAttribute> attributes =
         provenance(options.render, options, source, frame, bake.stats.seconds);
     attributes.push_back(io::HeaderAttribute::of_integer("modestack:points", points.count()));
@@ -303,7 +304,7 @@ Subcommand add_render_command(CLI::App& parent)
                         "Render only the pixels where this mask sequence's first channel is non-zero");
     command->add_option("--points", options->points,
                         "Object space: also bake each frame's indirect light at fixed surface points into this "
-                        "sequence (DiffInd, DiffIndVar, Position; 1024 points per row) and add the PointLookup "
+                        "sequence (DiffInd, DiffIndVar, Position, Normal; 1024 points per row) and add the PointLookup "
                         "layer to the frames; for denoise --object-space");
     command->add_option("--point-count", options->point_count,
                         "About how many surface points --points places (default: width x height); each "

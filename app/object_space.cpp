@@ -34,6 +34,44 @@ std::int64_t recorded_point_count(const io::SequenceReader& points)
     return slots;
 }
 
+// The lattice spacing `render --points` recorded (0 when the file does not say).
+double recorded_spacing(const io::SequenceReader& points)
+{
+    const io::FrameHeader header = io::read_frame_header(points.sequence().files.front());
+    for (const auto& [name, value] : header.attributes)
+        if (name == "modestack:point_spacing")
+            return std::atof(value.substr(value.find_last_of(' ') + 1).c_str());
+    return 0;
+}
+
+// Positions and normals of the points in the shot's first frame (their rest
+// pose: neighbours on a surface stay neighbours as it moves), or an empty
+// result when the points files lack either layer.
+denoise::SurfaceSamples read_surface_samples(const io::FrameSequence& files, std::int64_t count, double spacing)
+{
+    denoise::SurfaceSamples samples;
+    samples.spacing = spacing;
+    io::FrameSequence first = files;
+    first.files.resize(1);
+    first.frames.resize(1);
+    auto read_layer = [&](const char* layer, std::vector<float>& out) {
+        try {
+            io::SequenceReader reader(first, {layer});
+            if (reader.selected_channel_count() != 3)
+                return false;
+            std::vector<float> all(static_cast<std::size_t>(reader.width()) * reader.height() * 3);
+            reader.read_selected(0, 0, reader.height(), all.data());
+            out.assign(all.begin(), all.begin() + count * 3);
+            return true;
+        } catch (const Error&) {
+            return false;
+        }
+    };
+    if (!read_layer("Position", samples.positions) || !read_layer("Normal", samples.normals))
+        return {};
+    return samples;
+}
+
 std::unique_ptr<io::SequenceReader> open_lookup(const io::FrameSequence& frames)
 {
     std::unique_ptr<io::SequenceReader> lookup;
@@ -124,6 +162,37 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
     SequenceSource point_source(point_reader);
     PointStore store(point_source.shape());
     result.report = denoise::run_denoise(point_source, store, settings, progress);
+    // Sigma (and the filter) over the surfaces: the engine's sigma pooled over a
+    // point image's rows, which are not surface neighbours.
+    denoise::SurfaceSamples samples = read_surface_samples(point_files, result.points, recorded_spacing(point_reader));
+    if (samples.count() == 0 || !(samples.spacing > 0)) {
+        progress.warn(fmt::format("{} has no Position and Normal layers or no modestack:point_spacing: sigma is "
+                                  "the point image's and the points are not filtered over the surfaces",
+                                  point_files.files.front()));
+    } else {
+        const int frame_count = point_reader.frame_count();
+        const std::size_t point_values = static_cast<std::size_t>(point_reader.width()) * point_reader.height() *
+                                         static_cast<std::size_t>(point_reader.selected_channel_count());
+        std::vector<std::vector<float>> noisy(static_cast<std::size_t>(frame_count), std::vector<float>(point_values));
+        tbb::parallel_for(0, frame_count, [&](int t) {
+            point_reader.read_selected(t, 0, point_reader.height(), noisy[static_cast<std::size_t>(t)].data());
+        });
+        std::vector<denoise::SurfaceFrame> frames;
+        for (int t = 0; t < frame_count; ++t) {
+            double leverage = 0;
+            for (const std::vector<double>& mode : result.report.temporal_modes)
+                leverage += mode[static_cast<std::size_t>(t)] * mode[static_cast<std::size_t>(t)];
+            frames.push_back({noisy[static_cast<std::size_t>(t)].data(), store.values(t), store.sigma(t), leverage});
+        }
+        denoise::SurfaceFilterOptions options;
+        options.widths = job.filter_widths;
+        options.filter = job.surface_filter;
+        options.window_spacings = std::max(1, job.sigma_radius);
+        options.rank = result.report.rank.rank;
+        progress.begin("surface filter and sigma", 1);
+        result.filter = denoise::filter_surfaces(samples, options, point_reader.selected_channel_count(), frames);
+        progress.end();
+    }
 
     SequenceSink sink(frame_reader, job.outputs, "");
     std::vector<io::HeaderAttribute> attributes = job.attributes;

@@ -2,9 +2,10 @@
 // frames matrix that `render --points` baked (core/render/point_bake.h), then
 // each frame's layer rebuilt from the denoised points its pixels see (the
 // PointLookup layer of the frame). The points go through the same reader, engine,
-// rank rule and confidence as images; only the mode filter and the spatial
+// rank rule and confidence as images; the image mode filter and the spatial
 // pooling of sigma are left out, because neighbours in a point image are not
-// neighbours on the surfaces. The frames are written like an image-space
+// neighbours on the surfaces: the surface filter (core/denoise/surface_filter.h)
+// takes the mode filter's place, over the points' positions and normals. The frames are written like an image-space
 // denoise's (every input channel kept, the layer replaced, sigma appended), so
 // refine works on them unchanged.
 #pragma once
@@ -12,6 +13,7 @@
 #include "core/common/progress.h"
 #include "core/denoise/engine.h"
 #include "core/denoise/frame_stream.h"
+#include "core/denoise/surface_filter.h"
 #include "io/frame_output.h"
 #include "io/sequence.h"
 
@@ -27,8 +29,8 @@ public:
     explicit PointStore(denoise::ShotShape shape);
     void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma) override;
     /// Frame `frame_index`'s values and sigma, [point][channel] (padding points at the end).
-    const float* values(int frame_index) const { return m_values[static_cast<std::size_t>(frame_index)].data(); }
-    const float* sigma(int frame_index) const { return m_sigma[static_cast<std::size_t>(frame_index)].data(); }
+    float* values(int frame_index) { return m_values[static_cast<std::size_t>(frame_index)].data(); }
+    float* sigma(int frame_index) { return m_sigma[static_cast<std::size_t>(frame_index)].data(); }
 
 private:
     denoise::ShotShape m_shape;
@@ -51,11 +53,15 @@ struct ObjectSpaceJob {
     std::vector<std::string> layers;              ///< --layer, for frames and points alike
     std::vector<std::string> outputs;             ///< per frame; "" = not written
     std::vector<io::HeaderAttribute> attributes;  ///< provenance for every output
+    bool surface_filter = true;                   ///< filter over the surfaces (denoise/surface_filter.h)
+    std::vector<double> filter_widths;            ///< its candidate widths, in lattice spacings
+    int sigma_radius = 2;                         ///< sigma's pooling window, in lattice spacings (≥ 1 used)
 };
 
 /// What the job did, for the summary.
 struct ObjectSpaceResult {
     denoise::Report report;     ///< the engine's, on the points
+    denoise::SurfaceFilterChoice filter;  ///< what the surface filter chose (width 0: none)
     std::int64_t points = 0;    ///< surface points (from the points files)
     int frame_width = 0, frame_height = 0;
 };

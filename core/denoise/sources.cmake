@@ -13,4 +13,5 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/training.cpp
   ${CMAKE_CURRENT_LIST_DIR}/transform.cpp
   ${CMAKE_CURRENT_LIST_DIR}/weight_smoothing.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/whitening.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/whitening.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/surface_filter.cpp)

@@ -42,7 +42,10 @@ void bake_point(const TraceContext& context, const PointPlace& place, const Rend
     Vec3 normal = scene::cross(p1 - p0, p2 - p0);
     if (!(scene::length(normal) > 0))
         return; // a degenerate triangle receives no light
-    SurfaceStart start{point, scene::normalize(normal), place.mesh, place.triangle};
+    normal = scene::normalize(normal);
+    float* normal_out = out.normal.at(x, y);
+    normal_out[0] = normal.x, normal_out[1] = normal.y, normal_out[2] = normal.z;
+    SurfaceStart start{point, normal, place.mesh, place.triangle};
     PixelSampler sampler(mix_bits(options.seed ^ kBakeSeedSalt), frame, options.fixed_seed, x, y);
     double sum[3] = {0, 0, 0}, squares[3] = {0, 0, 0};
     for (int s = 0; s < options.spp; ++s) {
@@ -91,6 +94,7 @@ void bake_points(const scene::Scene& scene, int frame, const SurfacePoints& poin
     out.indirect.reset(width, height, 3);
     out.variance.reset(width, height, 3);
     out.position.reset(width, height, 3);
+    out.normal.reset(width, height, 3);
     out.stats = {};
     const std::vector<PointPlace> places = points.places();
     RayScene ray_scene(scene);

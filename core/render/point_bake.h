@@ -28,6 +28,7 @@ struct PointBake {
     AovImage indirect; ///< DiffInd at each point, RGB
     AovImage variance; ///< DiffIndVar: variance of each DiffInd value (0 at 1 spp)
     AovImage position; ///< Position: the point's world position in this frame
+    AovImage normal;   ///< Normal: its triangle's unit front normal in this frame
     RenderStats stats;
 };
 

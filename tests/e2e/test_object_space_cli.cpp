@@ -113,10 +113,10 @@ TEST_CASE("object space: bad inputs and option combinations give one line")
                                    dir.file("missing.####.exr") + " -q -o " + dir.file("o.####.exr"));
     CHECK(no_points.exit_code == 1);
     CHECK(no_points.err.find("missing") != std::string::npos);
-    auto filtered = run_modestack("denoise " + dir.file("g.####.exr") + " --layer DiffInd --mode-filter --object-space " +
-                                  dir.file("p.####.exr") + " -q -o " + dir.file("o.####.exr"));
-    CHECK(filtered.exit_code == 2);
-    CHECK(filtered.err.find("--object-space cannot be combined with --mode-filter") != std::string::npos);
+    auto staged = run_modestack("denoise " + dir.file("g.####.exr") + " --layer DiffInd --stage stats --object-space " +
+                                dir.file("p.####.exr") + " -q -o " + dir.file("o.bin"));
+    CHECK(staged.exit_code == 2);
+    CHECK(staged.err.find("--object-space cannot be combined with --stage") != std::string::npos);
     auto count_alone = run_modestack("render --scene static --frames 1 --size 8x8 --point-count 100 -q -o " +
                                      dir.file("h.####.exr"));
     CHECK(count_alone.exit_code == 2);
@@ -128,6 +128,6 @@ TEST_CASE("object space: bad inputs and option combinations give one line")
     // Nothing was written by the failed runs.
     for (const std::string& name : testkit::list_directory(dir.path()))
         CHECK_MESSAGE((name[0] == 'f' || name[0] == 'g' || name[0] == 'p'), name);
-    for (const std::string& line : {no_lookup.err, no_points.err, filtered.err, count_alone.err, changing.err})
+    for (const std::string& line : {no_lookup.err, no_points.err, staged.err, count_alone.err, changing.err})
         CHECK(std::count(line.begin(), line.end(), '\n') == 1);
 }
