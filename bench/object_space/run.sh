@@ -79,7 +79,9 @@ lines = [f"# Object-space denoising (issue 10)", "",
          f"bench/object_space/run.sh, {datetime.date.today()}, {os.cpu_count()} cores ({cpu}). "
          f"Input {spp} spp, reference {ref_spp} spp (seed 7), DiffInd against the reference "
          "(`modestack compare`). Equivalent spp = c/(e - b), c = e_noisy/(1/spp + 1/ref_spp), "
-         "b = c/ref_spp; (≥ c/e) is the lower bound if the reference were exact.", ""]
+         "b = c/ref_spp; (≥ c/e) is the lower bound if the reference were exact. Seconds: the render "
+         "(noisy: camera and bake) or the denoise alone; speed-up: rendering the equivalent spp "
+         "(time per spp from the reference render) against our render + denoise.", ""]
 names = {"noisy": f"noisy {spp} spp", "image": "image space (mode filter)",
          "image_temporal": "image space, --no-mode-filter", "object": "object space"}
 for shot in ("flythrough", "gltf_room"):
@@ -89,21 +91,30 @@ for shot in ("flythrough", "gltf_room"):
     c = e_noisy / (1 / spp + 1 / ref_spp)
     b = c / ref_spp
     render = load(os.path.join(d, "noisy.json"))
+    reference = load(os.path.join(d, "ref.json"))
+    frames = len(render["per_frame"])
+    # Render time per frame and spp, from the reference (its fixed cost is negligible at ref_spp).
+    seconds_per_spp = reference["render_seconds"] / frames / ref_spp
     points = render.get("points", {})
     lines += [f"## {shot}: {len(render['per_frame'])} frames {render['width']}x{render['height']}, "
               f"{points.get('count', '?')} surface points (spacing {points.get('spacing', 0):.3g} m)", "",
-              "| result | relMSE | PSNR dB | flicker | N | equiv. spp (≥ c/e) | seconds |", "|---|---:|---:|---:|---:|---|---:|"]
+              "| result | relMSE | PSNR dB | flicker | N | equiv. spp (≥ c/e) | seconds | speed-up (≥) |",
+              "|---|---:|---:|---:|---:|---|---:|---|"]
     for name in ("noisy", "image", "image_temporal", "object"):
         figures = shot_json(name)
         e = figures["relative_mse"]
         equivalent = c / (e - b) if e > b else float("inf")
         if name == "noisy":
-            n, seconds = "", render["render_seconds"]
+            n, seconds, cost = "", render["render_seconds"], render["render_seconds"]
         else:
             summary = load(os.path.join(d, f"{name}.json"))
             n, seconds = summary["rank"]["n"], summary["seconds"]["total"]
+            cost = render["render_seconds"] + seconds  # our render (with the bake) + the denoise
+        # Equal-quality speed-up: rendering the equivalent spp against our render + denoise.
+        speed_up = frames * seconds_per_spp * equivalent / cost
+        lower = frames * seconds_per_spp * (c / e) / cost
         lines.append(f"| {names[name]} | {e:.4g} | {figures['psnr_db']:.2f} | {figures['flicker']:.4g} | {n} | "
-                     f"{equivalent:.0f} (≥ {c / e:.0f}) | {seconds:.1f} |")
+                     f"{equivalent:.0f} (≥ {c / e:.0f}) | {seconds:.1f} | {speed_up:.1f}× (≥ {lower:.1f}×) |")
     lines.append("")
     if True:
         def diffind(path):

@@ -157,7 +157,7 @@ TEST_CASE("surface filter: sigma bounds the error and stands out where the modes
     CHECK(inside / inside_count > 5 * outside / outside_count);
 }
 
-TEST_CASE("surface filter: a clean field is not filtered and keeps its values; threads do not matter")
+TEST_CASE("surface filter: a clean field is not filtered and keeps its values, and threads do not matter")
 {
     Corner clean = make_corner(0.0);
     std::vector<std::vector<float>> before = clean.rebuilt;
