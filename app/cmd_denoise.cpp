@@ -175,6 +175,33 @@ nlohmann::ordered_json mode_filter_json(const denoise::Report& report)
             {"modes", modes}};
 }
 
+// The opening fields of the --json summary: what ran on which frames, at what size.
+nlohmann::ordered_json run_json(const DenoiseOptions& options, const io::FrameSequence& input,
+                                const denoise::Report& report, int frames_written, int width, int height)
+{
+    nlohmann::ordered_json json;
+    json["version"] = version_string();
+    json["command"] = command_line();
+    json["input"] = input.printf_pattern;
+    json["output"] = options.output;
+    json["frames"] = io::describe_frames(input.frames);
+    json["frame_count"] = report.shape.frames;
+    json["frames_written"] = frames_written;
+    json["width"] = width;
+    json["height"] = height;
+    return json;
+}
+
+// Seconds per phase and the peak memory of the run.
+void add_time_and_memory_json(const denoise::Report& report, double seconds_total, nlohmann::ordered_json& json)
+{
+    json["seconds"] = {{"statistics", report.seconds_statistics},
+                       {"solve", report.seconds_solve},
+                       {"rebuild", report.seconds_rebuild},
+                       {"total", seconds_total}};
+    json["peak_memory_bytes"] = peak_resident_bytes();
+}
+
 // N and why, the spectrum, the temporal modes and the outlier counts of a run.
 void add_modes_json(const denoise::Report& report, nlohmann::ordered_json& json)
 {
@@ -194,16 +221,8 @@ nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::Seq
                                     const denoise::Report& report, double seconds_total, int frames_written,
                                     std::int64_t max_memory_bytes)
 {
-    nlohmann::ordered_json json;
-    json["version"] = version_string();
-    json["command"] = command_line();
-    json["input"] = reader.sequence().printf_pattern;
-    json["output"] = options.output;
-    json["frames"] = io::describe_frames(reader.sequence().frames);
-    json["frame_count"] = report.shape.frames;
-    json["frames_written"] = frames_written;
-    json["width"] = report.shape.width;
-    json["height"] = report.shape.height;
+    nlohmann::ordered_json json =
+        run_json(options, reader.sequence(), report, frames_written, report.shape.width, report.shape.height);
     json["channels"] = reader.selected_channel_names();
     nlohmann::ordered_json layers = nlohmann::ordered_json::array();
     for (const auto& layer : reader.layers())
@@ -222,11 +241,7 @@ nlohmann::ordered_json summary_json(const DenoiseOptions& options, const io::Seq
                             {"smallest", report.rank_map.smallest},
                             {"largest", report.rank_map.largest},
                             {"pixels_per_whole_rank", report.rank_map.histogram}};
-    json["seconds"] = {{"statistics", report.seconds_statistics},
-                       {"solve", report.seconds_solve},
-                       {"rebuild", report.seconds_rebuild},
-                       {"total", seconds_total}};
-    json["peak_memory_bytes"] = peak_resident_bytes();
+    add_time_and_memory_json(report, seconds_total, json);
     json["max_memory_bytes"] = max_memory_bytes;
     // What the program and its open files were counted to hold; the rest went to the plan.
     json["memory_held_bytes"] = max_memory_bytes - report.plan.budget_bytes;
@@ -257,6 +272,37 @@ void write_denoise_report(const DenoiseOptions& options, const io::SequenceReade
                                          options.method_options.transform));
     report::write_report(options.report_path, data);
     report::publish_report(std::move(data));
+}
+
+// Provenance every output frame records.
+std::vector<io::HeaderAttribute> provenance_attributes(const io::FrameSequence& input)
+{
+    return {
+        io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
+        io::HeaderAttribute::of_text("modestack:command", command_line()),
+        io::HeaderAttribute::of_text("modestack:input", input.printf_pattern),
+        io::HeaderAttribute::of_text("modestack:frames", io::describe_frames(input.frames)),
+    };
+}
+
+// Clears the paths not to write (already empty, or existing with --skip-existing)
+// and returns how many are left.
+int keep_frames_to_write(std::vector<std::string>& paths, bool skip_existing)
+{
+    int frames_written = 0;
+    for (std::string& path : paths) {
+        if (path.empty() || (skip_existing && std::filesystem::exists(path)))
+            path.clear();
+        else
+            ++frames_written;
+    }
+    return frames_written;
+}
+
+void warn_nothing_to_do(RunContext& context, const std::string& output)
+{
+    context.progress().warn(
+        fmt::format("every output of {} exists already (--skip-existing): nothing to do", output));
 }
 
 // What --object-space cannot be combined with: everything that needs image
@@ -294,26 +340,13 @@ int run_object_space_denoise(const DenoiseOptions& options, const denoise::Setti
     job.surface_filter = !options.no_mode_filter;
     job.filter_widths = options.mode_filter_widths;
     job.sigma_radius = options.sigma_radius;
-    job.attributes = {
-        io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
-        io::HeaderAttribute::of_text("modestack:command", command_line()),
-        io::HeaderAttribute::of_text("modestack:input", input.printf_pattern),
-        io::HeaderAttribute::of_text("modestack:frames", io::describe_frames(input.frames)),
-    };
+    job.attributes = provenance_attributes(input);
     ObjectSpaceResult result = run_object_space(job, settings, context.progress());
     const denoise::Report& report = result.report;
     double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!options.json_path.empty()) {
-        nlohmann::ordered_json json;
-        json["version"] = version_string();
-        json["command"] = command_line();
-        json["input"] = input.printf_pattern;
-        json["output"] = options.output;
-        json["frames"] = io::describe_frames(input.frames);
-        json["frame_count"] = report.shape.frames;
-        json["frames_written"] = frames_written;
-        json["width"] = result.frame_width;
-        json["height"] = result.frame_height;
+        nlohmann::ordered_json json =
+            run_json(options, input, report, frames_written, result.frame_width, result.frame_height);
         json["object_space"] = {{"points_input", options.object_space},
                                 {"points", result.points},
                                 {"point_image_width", report.shape.width},
@@ -326,11 +359,7 @@ int run_object_space_denoise(const DenoiseOptions& options, const denoise::Setti
                                   {"reasoning", result.filter.reasoning}};
         json["solver"] = report.solver;
         add_modes_json(report, json);
-        json["seconds"] = {{"statistics", report.seconds_statistics},
-                           {"solve", report.seconds_solve},
-                           {"rebuild", report.seconds_rebuild},
-                           {"total", seconds}};
-        json["peak_memory_bytes"] = peak_resident_bytes();
+        add_time_and_memory_json(report, seconds, json);
         io::write_text_file(options.json_path, json.dump(2) + "\n");
     }
     if (!options.common.quiet)
@@ -388,16 +417,9 @@ int run_denoise(const DenoiseOptions& options)
             inputs.push_back(file);
         io::check_outputs(output.files, inputs);
         std::vector<std::string> paths = output.files;
-        int frames_written = 0;
-        for (std::string& path : paths) {
-            if (options.skip_existing && std::filesystem::exists(path))
-                path.clear();
-            else
-                ++frames_written;
-        }
+        const int frames_written = keep_frames_to_write(paths, options.skip_existing);
         if (frames_written == 0) {
-            context.progress().warn(fmt::format("every output of {} exists already (--skip-existing): nothing to do",
-                                                options.output));
+            warn_nothing_to_do(context, options.output);
             return 0;
         }
         return run_object_space_denoise(options, settings, input, paths, frames_written, start, context);
@@ -411,16 +433,9 @@ int run_denoise(const DenoiseOptions& options)
     std::vector<std::string> paths = writes_frames ? output.files : std::vector<std::string>(input.files.size());
     if (staged && writes_frames)
         staged->keep_written_frames(options.frames, input.frames, paths);
-    int frames_written = 0;
-    for (std::string& path : paths) {
-        if (path.empty() || (options.skip_existing && std::filesystem::exists(path)))
-            path.clear();
-        else
-            ++frames_written;
-    }
+    const int frames_written = keep_frames_to_write(paths, options.skip_existing);
     if (frames_written == 0 && options.save_modes.empty() && writes_frames) {
-        context.progress().warn(fmt::format("every output of {} exists already (--skip-existing): nothing to do",
-                                            options.output));
+        warn_nothing_to_do(context, options.output);
         return 0;
     }
 
@@ -432,12 +447,7 @@ int run_denoise(const DenoiseOptions& options)
     SequenceSink sink(reader, paths, options.save_modes);
     sink.reuse_rows_of(source);
     sink.write_rank_map_to(options.rank_map);
-    std::vector<io::HeaderAttribute> attributes{
-        io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
-        io::HeaderAttribute::of_text("modestack:command", command_line()),
-        io::HeaderAttribute::of_text("modestack:input", input.printf_pattern),
-        io::HeaderAttribute::of_text("modestack:frames", io::describe_frames(input.frames)),
-    };
+    std::vector<io::HeaderAttribute> attributes = provenance_attributes(input);
     append_color_attributes(attributes, color);
     if (transform.kind != denoise::TransformKind::None)
         attributes.push_back(
