@@ -18,31 +18,53 @@ namespace {
 
 constexpr int kLookupChannels = 2 * render::kLookupPoints;
 
-// The point count `render --points` recorded, else every slot of the point image.
-std::int64_t recorded_point_count(const io::SequenceReader& points)
+// What `render --points` recorded in the header of a points sequence.
+struct PointHeader {
+    std::int64_t count = 0; ///< points; every slot of the point image when not recorded
+    double spacing = 0;     ///< lattice spacing in metres; 0 when not recorded
+};
+
+PointHeader read_point_header(const io::SequenceReader& points)
 {
     const io::FrameHeader header = io::read_frame_header(points.sequence().files.front());
     const std::int64_t slots = static_cast<std::int64_t>(points.width()) * points.height();
-    for (const auto& [name, value] : header.attributes)
+    PointHeader result{slots, 0.0};
+    // Attribute values read "type value": the number is the last word.
+    auto number = [](const std::string& value) { return value.substr(value.find_last_of(' ') + 1); };
+    for (const auto& [name, value] : header.attributes) {
         if (name == "modestack:points") {
-            std::int64_t count = std::atoll(value.substr(value.find_last_of(' ') + 1).c_str());
-            if (count < 1 || count > slots)
-                throw bad_input(header.file, fmt::format("records {} points in a {}x{} point image", count,
+            result.count = std::atoll(number(value).c_str());
+            if (result.count < 1 || result.count > slots)
+                throw bad_input(header.file, fmt::format("records {} points in a {}x{} point image", result.count,
                                                          points.width(), points.height()));
-            return count;
+        } else if (name == "modestack:point_spacing") {
+            result.spacing = std::atof(number(value).c_str());
         }
-    return slots;
+    }
+    return result;
 }
 
-// The lattice spacing `render --points` recorded (0 when the file does not say).
-double recorded_spacing(const io::SequenceReader& points)
-{
-    const io::FrameHeader header = io::read_frame_header(points.sequence().files.front());
-    for (const auto& [name, value] : header.attributes)
-        if (name == "modestack:point_spacing")
-            return std::atof(value.substr(value.find_last_of(' ') + 1).c_str());
-    return 0;
-}
+// Keeps a copy of every row the engine reads: the noisy points sigma needs after
+// the rebuild, without decoding the points files a second time.
+class KeepingSource : public denoise::ForwardingSource {
+public:
+    explicit KeepingSource(denoise::FrameSource& inner) : ForwardingSource(inner), m_shape(inner.shape())
+    {
+        m_rows.assign(static_cast<std::size_t>(m_shape.frames), std::vector<float>(row_values() * m_shape.height));
+    }
+    void read_rows(int frame_index, int row_begin, int row_end, float* destination) override
+    {
+        m_inner.read_rows(frame_index, row_begin, row_end, destination);
+        std::copy(destination, destination + row_values() * (row_end - row_begin),
+                  m_rows[static_cast<std::size_t>(frame_index)].begin() + row_values() * row_begin);
+    }
+    const float* frame(int frame_index) const { return m_rows[static_cast<std::size_t>(frame_index)].data(); }
+
+private:
+    std::size_t row_values() const { return static_cast<std::size_t>(m_shape.width) * m_shape.channels; }
+    denoise::ShotShape m_shape;
+    std::vector<std::vector<float>> m_rows; // per frame, [row][x][channel]
+};
 
 // Positions and normals of the points in the shot's first frame (their rest
 // pose: neighbours on a surface stay neighbours as it moves), or an empty
@@ -150,7 +172,8 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
                                     "same layer (at most 4 channels) in both",
                                     point_reader.selected_channel_count(), frame_reader.selected_channel_count()));
     ObjectSpaceResult result;
-    result.points = recorded_point_count(point_reader);
+    const PointHeader header = read_point_header(point_reader);
+    result.points = header.count;
     result.frame_width = frame_reader.width();
     result.frame_height = frame_reader.height();
 
@@ -160,29 +183,24 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
     settings.rank_map.enabled = false;
     settings.sigma_radius = 0;
     SequenceSource point_source(point_reader);
+    KeepingSource noisy(point_source);  // every row is read: pass 1 needs them all for the statistics
     PointStore store(point_source.shape());
-    result.report = denoise::run_denoise(point_source, store, settings, progress);
+    result.report = denoise::run_denoise(noisy, store, settings, progress);
     // Sigma (and the filter) over the surfaces: the engine's sigma pooled over a
     // point image's rows, which are not surface neighbours.
-    denoise::SurfaceSamples samples = read_surface_samples(point_files, result.points, recorded_spacing(point_reader));
+    denoise::SurfaceSamples samples = read_surface_samples(point_files, result.points, header.spacing);
     if (samples.count() == 0 || !(samples.spacing > 0)) {
         progress.warn(fmt::format("{} has no Position and Normal layers or no modestack:point_spacing: sigma is "
                                   "the point image's and the points are not filtered over the surfaces",
                                   point_files.files.front()));
     } else {
         const int frame_count = point_reader.frame_count();
-        const std::size_t point_values = static_cast<std::size_t>(point_reader.width()) * point_reader.height() *
-                                         static_cast<std::size_t>(point_reader.selected_channel_count());
-        std::vector<std::vector<float>> noisy(static_cast<std::size_t>(frame_count), std::vector<float>(point_values));
-        tbb::parallel_for(0, frame_count, [&](int t) {
-            point_reader.read_selected(t, 0, point_reader.height(), noisy[static_cast<std::size_t>(t)].data());
-        });
         std::vector<denoise::SurfaceFrame> frames;
         for (int t = 0; t < frame_count; ++t) {
             double leverage = 0;
             for (const std::vector<double>& mode : result.report.temporal_modes)
                 leverage += mode[static_cast<std::size_t>(t)] * mode[static_cast<std::size_t>(t)];
-            frames.push_back({noisy[static_cast<std::size_t>(t)].data(), store.values(t), store.sigma(t), leverage});
+            frames.push_back({noisy.frame(t), store.values(t), store.sigma(t), leverage});
         }
         denoise::SurfaceFilterOptions options;
         options.widths = job.filter_widths;
