@@ -73,8 +73,7 @@ LightSet::LightSet(const scene::Scene& scene)
             continue;
         m_first_light.back() = static_cast<int>(m_triangles.size());
         for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-            Vec3 p0 = mesh.positions[mesh.indices[3 * t]], p1 = mesh.positions[mesh.indices[3 * t + 1]],
-                 p2 = mesh.positions[mesh.indices[3 * t + 2]];
+            auto [p0, p1, p2] = mesh.corners(t);
             Vec3 normal = scene::cross(p1 - p0, p2 - p0);
             float area = 0.5f * scene::length(normal);
             // Degenerate triangles stay in the list (so indices line up) with zero power.

@@ -31,9 +31,7 @@ void bake_point(const TraceContext& context, const PointPlace& place, const Rend
                 int x, int y, PointBake& out, std::int64_t& rays)
 {
     const scene::Mesh& mesh = context.scene->meshes[place.mesh];
-    const std::size_t t = static_cast<std::size_t>(place.triangle);
-    Vec3 p0 = mesh.positions[mesh.indices[3 * t]], p1 = mesh.positions[mesh.indices[3 * t + 1]],
-         p2 = mesh.positions[mesh.indices[3 * t + 2]];
+    auto [p0, p1, p2] = mesh.corners(static_cast<std::size_t>(place.triangle));
     Vec3 point = p0 + (p1 - p0) * place.b1 + (p2 - p0) * place.b2;
     Vec3 centroid = (p0 + p1 + p2) * (1.0f / 3.0f);
     point = point + (centroid - point) * kInsetFraction;

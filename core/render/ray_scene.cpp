@@ -51,9 +51,7 @@ RayScene::RayScene(const scene::Scene& description) : m_impl(std::make_unique<Im
                 throw Error(ErrorKind::BadInput, "scene mesh '" + mesh.name + "': vertex index out of range");
         std::vector<scene::Vec3>& normals = m_impl->triangle_normals.emplace_back();
         for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-            scene::Vec3 p0 = mesh.positions[mesh.indices[3 * t]],
-                        p1 = mesh.positions[mesh.indices[3 * t + 1]],
-                        p2 = mesh.positions[mesh.indices[3 * t + 2]];
+            auto [p0, p1, p2] = mesh.corners(t);
             scene::Vec3 normal = scene::cross(p1 - p0, p2 - p0);
             float area2 = scene::length(normal);
             normals.push_back(area2 > 0 ? normal * (1.0f / area2) : scene::Vec3{0, 0, 1});

@@ -15,8 +15,7 @@ using scene::Vec3;
 
 float longest_edge(const scene::Mesh& mesh, std::size_t triangle)
 {
-    Vec3 p0 = mesh.positions[mesh.indices[3 * triangle]], p1 = mesh.positions[mesh.indices[3 * triangle + 1]],
-         p2 = mesh.positions[mesh.indices[3 * triangle + 2]];
+    auto [p0, p1, p2] = mesh.corners(triangle);
     return std::max({scene::length(p1 - p0), scene::length(p2 - p1), scene::length(p0 - p2)});
 }
 

@@ -8,6 +8,7 @@
 
 #include "core/scene/vec3.h"
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -29,6 +30,11 @@ struct Mesh {
     Material material;
 
     std::size_t triangle_count() const { return indices.size() / 3; }
+    /// The corners of triangle `t` in winding order (its indices must be in range).
+    std::array<Vec3, 3> corners(std::size_t t) const
+    {
+        return {positions[indices[3 * t]], positions[indices[3 * t + 1]], positions[indices[3 * t + 2]]};
+    }
 };
 
 /// A pinhole camera.

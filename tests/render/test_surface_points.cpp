@@ -20,9 +20,7 @@ namespace {
 scene::Vec3 world_position(const scene::Scene& scene, const PointPlace& place)
 {
     const scene::Mesh& mesh = scene.meshes[place.mesh];
-    const std::size_t t = static_cast<std::size_t>(place.triangle);
-    scene::Vec3 p0 = mesh.positions[mesh.indices[3 * t]], p1 = mesh.positions[mesh.indices[3 * t + 1]],
-                p2 = mesh.positions[mesh.indices[3 * t + 2]];
+    auto [p0, p1, p2] = mesh.corners(static_cast<std::size_t>(place.triangle));
     return p0 + (p1 - p0) * place.b1 + (p2 - p0) * place.b2;
 }
 
@@ -30,8 +28,7 @@ double mesh_area(const scene::Mesh& mesh)
 {
     double area = 0;
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-        scene::Vec3 p0 = mesh.positions[mesh.indices[3 * t]], p1 = mesh.positions[mesh.indices[3 * t + 1]],
-                    p2 = mesh.positions[mesh.indices[3 * t + 2]];
+        auto [p0, p1, p2] = mesh.corners(t);
         area += 0.5 * scene::length(scene::cross(p1 - p0, p2 - p0));
     }
     return area;
@@ -75,9 +72,8 @@ TEST_CASE("surface points: placed by area, with no lattice cell longer than the 
     }
     for (int mesh = 0; mesh < points.mesh_count(); ++mesh)
         for (std::size_t t = 0; t < rest.meshes[mesh].triangle_count(); ++t) {
-            const scene::Mesh& m = rest.meshes[mesh];
-            scene::Vec3 p0 = m.positions[m.indices[3 * t]], p1 = m.positions[m.indices[3 * t + 1]];
-            CHECK(scene::length(p1 - p0) / points.resolution(mesh, static_cast<int>(t)) <= 0.05 + 1e-6);
+            std::array<scene::Vec3, 3> corners = rest.meshes[mesh].corners(t);
+            CHECK(scene::length(corners[1] - corners[0]) / points.resolution(mesh, static_cast<int>(t)) <= 0.05 + 1e-6);
         }
 }
 

@@ -28,8 +28,7 @@ void check_vec3(Vec3 actual, Vec3 expected, double epsilon = 1e-5)
 
 Vec3 front_normal(const Mesh& mesh, std::size_t triangle)
 {
-    Vec3 p0 = mesh.positions[mesh.indices[3 * triangle]], p1 = mesh.positions[mesh.indices[3 * triangle + 1]],
-         p2 = mesh.positions[mesh.indices[3 * triangle + 2]];
+    auto [p0, p1, p2] = mesh.corners(triangle);
     return cross(p1 - p0, p2 - p0);
 }
 
