@@ -94,7 +94,7 @@ void bake_points(const scene::Scene& scene, int frame, const SurfacePoints& poin
     out.position.reset(width, height, 3);
     out.normal.reset(width, height, 3);
     out.stats = {};
-    const std::vector<PointPlace> places = points.places();
+    const std::vector<PointPlace>& places = points.places();
     RayScene ray_scene(scene);
     LightSet lights(scene);
     TraceContext context{&scene, &ray_scene, &lights, options.max_depth, Vec3{0, 0, -1}};

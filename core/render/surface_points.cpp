@@ -66,6 +66,16 @@ SurfacePoints::SurfacePoints(const scene::Scene& rest, double spacing, std::int6
                                               spacing, max_points));
         }
     }
+    // Ids run mesh by mesh, triangle by triangle, row j by row j, i within a row.
+    m_places.reserve(static_cast<std::size_t>(m_count));
+    for (int mesh = 0; mesh < mesh_count(); ++mesh)
+        for (int triangle = 0; triangle < static_cast<int>(m_resolution[mesh].size()); ++triangle) {
+            const int n = m_resolution[mesh][triangle];
+            for (int j = 0; j <= n; ++j)
+                for (int i = 0; i + j <= n; ++i)
+                    m_places.push_back({mesh, triangle, static_cast<float>(i) / static_cast<float>(n),
+                                        static_cast<float>(j) / static_cast<float>(n)});
+        }
 }
 
 double SurfacePoints::spacing_for_count(const scene::Scene& rest, std::int64_t target)
@@ -89,15 +99,6 @@ double SurfacePoints::spacing_for_count(const scene::Scene& rest, std::int64_t t
 std::int64_t SurfacePoints::id(int mesh, int triangle, int i, int j) const
 {
     return m_first_id[mesh][triangle] + row_offset(m_resolution[mesh][triangle], j) + i;
-}
-
-std::vector<PointPlace> SurfacePoints::places() const
-{
-    std::vector<PointPlace> result(static_cast<std::size_t>(m_count));
-    for_each_point([&](std::int64_t id, int mesh, int triangle, float b1, float b2) {
-        result[static_cast<std::size_t>(id)] = {mesh, triangle, b1, b2};
-    });
-    return result;
 }
 
 void SurfacePoints::check_topology(const scene::Scene& scene, const std::string& what) const

@@ -62,27 +62,13 @@ public:
     /// which sum to 1: linear interpolation over the lattice cell.
     void interpolate(int mesh, int triangle, float b1, float b2, PointWeight out[3]) const;
 
-    /// Every point's place, indexed by id.
-    std::vector<PointPlace> places() const;
-
-    /// Calls visit(id, mesh, triangle, b1, b2) for every point in id order.
-    template <typename Visit>
-    void for_each_point(Visit&& visit) const
-    {
-        for (int mesh = 0; mesh < mesh_count(); ++mesh)
-            for (int triangle = 0; triangle < static_cast<int>(m_resolution[mesh].size()); ++triangle) {
-                const int n = m_resolution[mesh][triangle];
-                std::int64_t next = m_first_id[mesh][triangle];
-                for (int j = 0; j <= n; ++j)
-                    for (int i = 0; i + j <= n; ++i)
-                        visit(next++, mesh, triangle, static_cast<float>(i) / static_cast<float>(n),
-                              static_cast<float>(j) / static_cast<float>(n));
-            }
-    }
+    /// Every point's place, indexed by id (made once, with the lattices).
+    const std::vector<PointPlace>& places() const { return m_places; }
 
 private:
     std::vector<std::vector<int>> m_resolution;         // [mesh][triangle] → n
     std::vector<std::vector<std::int64_t>> m_first_id;  // [mesh][triangle] → id of (0, 0)
+    std::vector<PointPlace> m_places;                   // by id
     std::int64_t m_count = 0;
     double m_spacing = 0;
 };
