@@ -29,6 +29,56 @@ struct RowScratch {
     std::vector<double> sorted;
 };
 
+// Clamps the fireflies of scratch.row (see outliers.h); true when it changed it.
+bool clamp_fireflies(RowScratch& scratch, const OutlierOptions& options, OutlierCounts& counts)
+{
+    const std::size_t frames = scratch.row.size();
+    std::copy(scratch.row.begin(), scratch.row.end(), scratch.sorted.begin());
+    const double median = median_of(scratch.sorted, frames);
+    const auto [lowest, highest] = std::minmax_element(scratch.row.begin(), scratch.row.end());
+    // The median of |x|: for a row with no negative value (radiance) that is the median.
+    double typical_magnitude = median;
+    if (*lowest < 0.0) {
+        for (std::size_t t = 0; t < frames; ++t)
+            scratch.sorted[t] = std::abs(scratch.row[t]);
+        typical_magnitude = median_of(scratch.sorted, frames);
+    }
+    const double floor_spread = std::max(options.mad_floor_fraction * typical_magnitude, 1e-30);
+    const auto threshold_of = [&](double mad) {
+        return median + options.firefly_k * 1.4826 * std::max(mad, floor_spread);
+    };
+    // Most rows have no firefly, and the threshold only grows with the MAD (as
+    // does its rounding): once some D ≤ MAD gives a threshold at or above the
+    // largest sample, the row is clean without the MAD's median. D is the spread
+    // that would put the threshold at the largest sample; D ≤ MAD when fewer than
+    // half of the deviations lie below D.
+    if (*highest <= threshold_of(0.0))
+        return false;
+    std::size_t below = 0;
+    const double enough = (*highest - median) / (options.firefly_k * 1.4826);
+    for (std::size_t t = 0; t < frames; ++t) {
+        scratch.sorted[t] = std::abs(scratch.row[t] - median);
+        below += scratch.sorted[t] < enough ? 1 : 0;
+    }
+    if (below < (frames + 1) / 2 && *highest <= threshold_of(enough))
+        return false;
+    const double mad = median_of(scratch.sorted, frames);
+    const double threshold = threshold_of(mad);
+    double excess = 0;
+    for (double& value : scratch.row)
+        if (value > threshold) {
+            excess += value - threshold;
+            value = threshold;
+            ++counts.fireflies;
+        }
+    if (excess <= 0)
+        return false;
+    const double share = excess / static_cast<double>(frames);
+    for (double& value : scratch.row)
+        value += share;
+    return true;
+}
+
 OutlierCounts clean_row(const MutableBandView& band, std::int64_t i, const OutlierOptions& options,
                         RowScratch& scratch, bool* changed_out = nullptr)
 {
@@ -51,37 +101,8 @@ OutlierCounts clean_row(const MutableBandView& band, std::int64_t i, const Outli
             }
         changed = true;
     }
-    if (options.fireflies && frames >= 3) {
-        std::copy(scratch.row.begin(), scratch.row.end(), scratch.sorted.begin());
-        const double median = median_of(scratch.sorted, scratch.row.size());
-        for (int t = 0; t < frames; ++t)
-            scratch.sorted[static_cast<std::size_t>(t)] =
-                std::abs(scratch.row[static_cast<std::size_t>(t)] - median);
-        const double mad = median_of(scratch.sorted, scratch.row.size());
-        // The median of |x|: for a row with no negative value (radiance) that is the median.
-        const bool non_negative = *std::min_element(scratch.row.begin(), scratch.row.end()) >= 0.0;
-        double typical_magnitude = median;
-        if (!non_negative) {
-            for (int t = 0; t < frames; ++t)
-                scratch.sorted[static_cast<std::size_t>(t)] = std::abs(scratch.row[static_cast<std::size_t>(t)]);
-            typical_magnitude = median_of(scratch.sorted, scratch.row.size());
-        }
-        const double spread = std::max({mad, options.mad_floor_fraction * typical_magnitude, 1e-30});
-        const double threshold = median + options.firefly_k * 1.4826 * spread;
-        double excess = 0;
-        for (double& value : scratch.row)
-            if (value > threshold) {
-                excess += value - threshold;
-                value = threshold;
-                ++counts.fireflies;
-            }
-        if (excess > 0) {
-            const double share = excess / frames;
-            for (double& value : scratch.row)
-                value += share;
-            changed = true;
-        }
-    }
+    if (options.fireflies && frames >= 3 && clamp_fireflies(scratch, options, counts))
+        changed = true;
     if (changed_out)
         *changed_out = changed;
     if (changed)
