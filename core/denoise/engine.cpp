@@ -4,6 +4,7 @@
 #include "core/denoise/training.h"
 
 #include "core/common/error.h"
+#include "core/common/scratch_buffer.h"
 #include "core/lowrank/basis.h"
 #include "core/lowrank/confidence.h"
 #include "core/lowrank/gram.h"
@@ -35,7 +36,7 @@ struct Band {
     std::int64_t rows = 0;    // samples per frame: width * (row_end - row_begin) * channels
     std::int64_t stride = 0;  // samples from one frame to the next
     float* data = nullptr;
-    std::vector<float> storage;
+    ScratchBuffer<float> storage;  // read_band writes every sample
 
     lowrank::MutableBandView view(int frames) const { return {data, rows, frames, stride}; }
 };
@@ -534,7 +535,7 @@ private:
     // which sigma's kept noise per frame follows (kept_noise_of_frame).
     // With --rank-map, `ranks` receives each valid pixel's rank and every filtered
     // mode is scaled by its blend weight at the pixel (rank_map.h).
-    void filter_band(std::vector<float>& coefficients, const Band& data, int modes, int row, int end,
+    void filter_band(ScratchBuffer<float>& coefficients, const Band& data, int modes, int row, int end,
                      std::vector<float>& gains, std::vector<float>* ranks)
     {
         const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
@@ -655,12 +656,11 @@ private:
                              std::int64_t samples, float* kept) const
     {
         const std::int64_t pixels = samples / m_shape.channels;
-        for (std::int64_t i = 0; i < samples; ++i) {
-            const std::int64_t pixel = i / m_shape.channels;
+        for (std::int64_t pixel = 0; pixel < pixels; ++pixel) {
             double sum = 0;
             for (int j = 0; j < modes; ++j)
                 sum += temporal(t, j) * temporal(t, j) * gains[static_cast<size_t>(j * pixels + pixel)];
-            kept[i] = static_cast<float>(sum);
+            std::fill_n(kept + pixel * m_shape.channels, m_shape.channels, static_cast<float>(sum));
         }
     }
 
@@ -692,7 +692,8 @@ private:
         Band band;
         // Reused from band to band: fresh buffers of this size cost the kernel's page
         // zeroing every band (7.5 % of a 1080p run's time).
-        std::vector<float> sigma, ranks;
+        ScratchBuffer<float> sigma;  // frame_sigma writes every value
+        std::vector<float> ranks;
         for (int row = 0; row < m_shape.height; row += plan.band_rows) {
             int end = std::min(m_shape.height, row + plan.band_rows);
             Band& data = band_with_halo(band, row, end);
@@ -848,7 +849,7 @@ private:
     }
 
     // Spatial modes ps(x, y, j) = coefficient_j / σ_j, for inspection ([0048]).
-    void write_modes(const std::vector<float>& coefficients, const Band& data, const lowrank::Basis& basis, int rank,
+    void write_modes(const ScratchBuffer<float>& coefficients, const Band& data, const lowrank::Basis& basis, int rank,
                      int row, int end, std::int64_t offset)
     {
         std::int64_t samples = static_cast<std::int64_t>(m_shape.width) * (end - row) * m_shape.channels;
@@ -874,8 +875,8 @@ private:
     int m_filter_modes = 0;  // modes the mode filter surveyed
     std::vector<float> m_filtered;  // filter_band's output, reused from band to band
     // prepare_band's results for the current band, reused from band to band:
-    std::vector<float> m_coefficients;    // [mode][sample] of the band with its halo
-    std::vector<float> m_rebuilt;         // [frame][sample]: the unfiltered rebuild, then the output rows
+    ScratchBuffer<float> m_coefficients;  // [mode][sample] of the band with its halo
+    ScratchBuffer<float> m_rebuilt;       // [frame][sample]: the unfiltered rebuild, then the output rows
     std::vector<float> m_noise_variance;  // sigma's s² of the valid rows
     std::vector<float> m_gains;           // the mode filter's kept-noise gain per valid pixel and mode
     lowrank::ConfidenceOptions m_confidence;

@@ -2,6 +2,7 @@
 
 #include "core/common/error.h"
 #include "core/common/progress.h"
+#include "core/common/scratch_buffer.h"
 #include "core/lowrank/tiles.h"
 
 #include <tbb/blocked_range.h>
@@ -49,7 +50,7 @@ double high_pass_power(const Rows& residual, const ImageBandShape& shape, int y,
 // Writes the mean over the (2·radius+1)² window (clipped at the band) of
 // sample(y, k) for the output rows of frame t into `out`'s frame t.
 void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, int valid_y0, int valid_y1,
-                   float* out_frame, std::vector<double>& column_sum)
+                   float* out_frame, std::vector<double>& column_sum, std::vector<double>& window_sum)
 {
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
     for (int y = valid_y0; y < valid_y1; ++y) {
@@ -61,7 +62,28 @@ void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, 
                 column_sum[static_cast<std::size_t>(k)] += sample(source_y, k);
         const int rows_in_window = y_last - y_first + 1;
         float* out_row = out_frame + (y - valid_y0) * row_length;
+        // Pixels whose window lies inside the row: all their samples at once, summed
+        // in the order of the loop below (which does the clipped ones), so that the
+        // compiler can vectorise it.
+        const int inner_first = std::min(radius, shape.width), inner_last = shape.width - 1 - radius;
+        if (inner_first <= inner_last) {
+            const std::int64_t first = static_cast<std::int64_t>(inner_first) * shape.channels;
+            const std::int64_t last = static_cast<std::int64_t>(inner_last + 1) * shape.channels;
+            const double count = static_cast<double>(rows_in_window) * (2 * radius + 1);
+            std::fill(window_sum.begin() + first, window_sum.begin() + last, 0.0);
+            for (int d = -radius; d <= radius; ++d) {
+                const double* source = column_sum.data() + static_cast<std::int64_t>(d) * shape.channels;
+                for (std::int64_t k = first; k < last; ++k)
+                    window_sum[static_cast<std::size_t>(k)] += source[k];
+            }
+            for (std::int64_t k = first; k < last; ++k)
+                out_row[k] = static_cast<float>(window_sum[static_cast<std::size_t>(k)] / count);
+        }
         for (int x = 0; x < shape.width; ++x) {
+            if (x == inner_first && inner_first <= inner_last)
+                x = inner_last + 1;
+            if (x >= shape.width)
+                break;
             const int x_first = std::max(0, x - radius);
             const int x_last = std::min(shape.width - 1, x + radius);
             const double count = static_cast<double>(rows_in_window) * (x_last - x_first + 1);
@@ -101,15 +123,16 @@ public:
         // This thread's buffers, reused from frame to frame and band to band (fresh
         // ones cost the kernel's page zeroing every frame); compute() runs nothing
         // in parallel, so no other frame can use them meanwhile.
-        static thread_local std::vector<double> residual_buffer, power_buffer, column_sum;
+        static thread_local std::vector<double> residual_buffer, power_buffer, column_sum, window_sum;
         residual_buffer.resize(static_cast<std::size_t>((m_residual_last - m_residual_first + 1) * m_row_length));
         column_sum.resize(static_cast<std::size_t>(m_row_length));
+        window_sum.resize(static_cast<std::size_t>(m_row_length));
         const Rows residual{residual_buffer.data(), m_residual_first, m_row_length};
         const std::int64_t first = m_residual_first * m_row_length;
         for (std::size_t j = 0; j < residual_buffer.size(); ++j)
             residual_buffer[j] = static_cast<double>(noisy_frame[first + j]) - rebuilt_frame[first + j];
         if (mean)
-            windowed_mean(residual, m_shape, m_radius, m_valid_y0, m_valid_y1, mean, column_sum);
+            windowed_mean(residual, m_shape, m_radius, m_valid_y0, m_valid_y1, mean, column_sum, window_sum);
         if (!power)
             return;
         power_buffer.resize(static_cast<std::size_t>((m_window_last - m_window_first + 1) * m_row_length));
@@ -118,7 +141,7 @@ public:
             for (std::int64_t k = 0; k < m_row_length; ++k)
                 power_buffer[static_cast<std::size_t>((y - m_window_first) * m_row_length + k)] =
                     high_pass_power(residual, m_shape, y, k);
-        windowed_mean(power_rows, m_shape, m_radius, m_valid_y0, m_valid_y1, power, column_sum);
+        windowed_mean(power_rows, m_shape, m_radius, m_valid_y0, m_valid_y1, power, column_sum, window_sum);
     }
 
 private:
@@ -140,12 +163,9 @@ void check_band(const BandView& noisy, const BandView& rebuilt, const ImageBandS
         throw internal_error("confidence: negative window radius");
 }
 
-// Pixels in the window around output sample i (clipped at the band).
-double window_size(const ImageBandShape& shape, int radius, int valid_y0, std::int64_t i)
+// Pixels in the window around pixel (x, y) (clipped at the band).
+double window_size(const ImageBandShape& shape, int radius, int x, int y)
 {
-    const std::int64_t pixel = i / shape.channels;
-    const int x = static_cast<int>(pixel % shape.width);
-    const int y = valid_y0 + static_cast<int>(pixel / shape.width);
     const int window_width = std::min(shape.width - 1, x + radius) - std::max(0, x - radius) + 1;
     const int window_height = std::min(shape.height - 1, y + radius) - std::max(0, y - radius) + 1;
     return static_cast<double>(window_width) * window_height;
@@ -164,23 +184,39 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
     if (samples == 0)
         return;
     throw_if_cancelled();
-    // Per frame, the windowed high-pass power; then s² sums it over frames in frame order.
-    std::vector<float> noise_power(static_cast<std::size_t>(samples) * frames);
-    tbb::parallel_for(tbb::blocked_range<int>(0, frames, 1), [&](const tbb::blocked_range<int>& range) {
-        ResidualWindows windows(shape, options.radius, valid_y0, valid_y1);
-        for (int t = range.begin(); t != range.end(); ++t)
-            windows.compute(noisy.data + t * noisy.frame_stride, rebuilt.data + t * rebuilt.frame_stride, nullptr,
-                            noise_power.data() + t * samples);
-    });
+    // Per frame, the windowed high-pass power, a group of frames at a time so that
+    // the scratch does not grow with F; s² sums it over frames in frame order. The
+    // scratch is this thread's, reused from band to band (fresh band-sized buffers
+    // cost the kernel's page clearing every band).
+    constexpr int kFrameGroup = 16;
+    // (The workers below must use this thread's buffers: a thread_local named in
+    // their lambdas would be their own.)
+    static thread_local ScratchBuffer<float> this_thread_noise_power;
+    static thread_local ScratchBuffer<double> this_thread_energy;
+    ScratchBuffer<float>& noise_power = this_thread_noise_power;
+    ScratchBuffer<double>& energy = this_thread_energy;
+    noise_power.resize(static_cast<std::size_t>(samples) * std::min(frames, kFrameGroup));
+    energy.resize(static_cast<std::size_t>(samples));
+    std::fill(energy.begin(), energy.end(), 0.0);
+    for (int group = 0; group < frames; group += kFrameGroup) {
+        const int group_end = std::min(frames, group + kFrameGroup);
+        tbb::parallel_for(tbb::blocked_range<int>(group, group_end, 1), [&](const tbb::blocked_range<int>& range) {
+            ResidualWindows windows(shape, options.radius, valid_y0, valid_y1);
+            for (int t = range.begin(); t != range.end(); ++t)
+                windows.compute(noisy.data + t * noisy.frame_stride, rebuilt.data + t * rebuilt.frame_stride,
+                                nullptr, noise_power.data() + (t - group) * samples);
+        });
+        for_each_tile(samples, [&](std::int64_t row0, std::int64_t count) {
+            for (int t = group; t < group_end; ++t) {
+                const float* power = noise_power.data() + (t - group) * samples;
+                for (std::int64_t i = row0; i < row0 + count; ++i)
+                    energy[static_cast<std::size_t>(i)] += power[i];
+            }
+        });
+    }
     const double degrees_of_freedom = frames - rank;
-    for_each_tile(samples, [&](std::int64_t row0, std::int64_t count) {
-        for (std::int64_t i = row0; i < row0 + count; ++i) {
-            double energy = 0;
-            for (int t = 0; t < frames; ++t)
-                energy += noise_power[static_cast<std::size_t>(t * samples + i)];
-            noise_variance[i] = static_cast<float>(energy / degrees_of_freedom);
-        }
-    });
+    for (std::int64_t i = 0; i < samples; ++i)
+        noise_variance[i] = static_cast<float>(energy[static_cast<std::size_t>(i)] / degrees_of_freedom);
 }
 
 void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape, int valid_y0,
@@ -191,16 +227,20 @@ void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const Ima
         throw internal_error("frame_sigma: output rows outside the band");
     ResidualWindows windows(shape, options.radius, valid_y0, valid_y1);
     windows.compute(noisy_frame, rebuilt_frame, sigma, nullptr);
-    const std::int64_t samples = static_cast<std::int64_t>(shape.width) * shape.channels * (valid_y1 - valid_y0);
-    for (std::int64_t i = 0; i < samples; ++i) {
-        // The windowed mean of pure noise has variance s²(1 − h_t)/|W|; what the
-        // squared mean holds beyond that is coherent missed content.
-        const double mean = sigma[i], variance = noise_variance[i];
-        const double bias = std::max(0.0, mean * mean - options.bias_significance * variance * (1.0 - leverage) /
-                                                            window_size(shape, options.radius, valid_y0, i));
-        const double kept = kept_noise ? static_cast<double>(kept_noise[i]) : leverage;
-        sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias));
-    }
+    std::int64_t i = 0;
+    for (int y = valid_y0; y < valid_y1; ++y)
+        for (int x = 0; x < shape.width; ++x) {
+            const double window = window_size(shape, options.radius, x, y);
+            for (int c = 0; c < shape.channels; ++c, ++i) {
+                // The windowed mean of pure noise has variance s²(1 − h_t)/|W|; what the
+                // squared mean holds beyond that is coherent missed content.
+                const double mean = sigma[i], variance = noise_variance[i];
+                const double bias = std::max(
+                    0.0, mean * mean - options.bias_significance * variance * (1.0 - leverage) / window);
+                const double kept = kept_noise ? static_cast<double>(kept_noise[i]) : leverage;
+                sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias));
+            }
+        }
 }
 
 void confidence_band(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
