@@ -2,6 +2,7 @@
 
 #include "core/common/error.h"
 #include "core/common/progress.h"
+#include "core/common/scratch_buffer.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -115,11 +116,16 @@ public:
                                : nullptr;
         const std::int64_t row_length = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
         const std::int64_t centre = y * row_length + static_cast<std::int64_t>(x) * m_shape.channels;
+        // Without a range or feature term the weight depends on the squared distance
+        // alone: looked up, not an exp per tap (the same values).
+        const bool unguided = range_scale == 0 && feature_scale == 0;
+        const std::vector<double>& spatial = unguided ? spatial_weights(candidate.width, radius) : m_no_weights;
         double sum = 0;
         std::size_t index = 0;
         for (int qy = y0; qy <= y1; ++qy)
             for (int qx = x0; qx <= x1; ++qx, ++index) {
-                double exponent = spatial_scale * ((qx - x) * (qx - x) + (qy - y) * (qy - y));
+                const int distance2 = (qx - x) * (qx - x) + (qy - y) * (qy - y);
+                double exponent = spatial_scale * distance2;
                 if (range_scale != 0) {
                     const std::int64_t other = qy * row_length + static_cast<std::int64_t>(qx) * m_shape.channels;
                     double distance = 0;  // squared guide difference in units of its noise
@@ -140,11 +146,38 @@ public:
                     }
                     exponent += feature_scale * distance;
                 }
-                sum += weights[index] = std::exp(exponent);
+                sum += weights[index] = unguided ? spatial[static_cast<std::size_t>(distance2)] : std::exp(exponent);
             }
         self = static_cast<std::size_t>(y - y0) * (x1 - x0 + 1) + (x - x0);
         return sum;
     }
+
+    // Σ_q w_q · image(q, c) over the window for every channel c into sums[c],
+    // image = [y][x][c] of the band: one pass over the weights for all channels,
+    // each sum in the order apply() takes.
+    void apply_all(const float* image, double* sums) const
+    {
+        const int channels = m_shape.channels;
+        if (channels > kMaximumChannels) {
+            for (int c = 0; c < channels; ++c)
+                sums[c] = apply(image, c);
+            return;
+        }
+        double local[kMaximumChannels] = {};
+        const std::int64_t row_length = static_cast<std::int64_t>(m_shape.width) * channels;
+        std::size_t index = 0;
+        for (int qy = y0; qy <= y1; ++qy) {
+            const float* row = image + qy * row_length + static_cast<std::int64_t>(x0) * channels;
+            for (int qx = x0; qx <= x1; ++qx, ++index, row += channels) {
+                const double weight = weights[index];
+                for (int c = 0; c < channels; ++c)
+                    local[c] += weight * row[c];
+            }
+        }
+        std::copy_n(local, channels, sums);
+    }
+
+    static constexpr int kMaximumChannels = 4;
 
     // Σ_q w_q · image(q, c) over the window, image = [y][x][c] of the band.
     double apply(const float* image, int c) const
@@ -165,8 +198,24 @@ public:
     int x0 = 0, x1 = 0, y0 = 0, y1 = 0;
 
 private:
+    // exp(−d² / 2σ²) for every squared distance d² a window of `radius` holds.
+    const std::vector<double>& spatial_weights(double width, int radius)
+    {
+        for (const auto& [table_width, table] : m_spatial_tables)
+            if (table_width == width)
+                return table;
+        std::vector<double> table(static_cast<std::size_t>(2 * radius * radius + 1));
+        const double spatial_scale = -0.5 / (width * width);
+        for (std::size_t d2 = 0; d2 < table.size(); ++d2)
+            table[d2] = std::exp(spatial_scale * static_cast<int>(d2));
+        m_spatial_tables.emplace_back(width, std::move(table));
+        return m_spatial_tables.back().second;
+    }
+
     const Guide& m_guide;
     const ImageBandShape& m_shape;
+    std::vector<std::pair<double, std::vector<double>>> m_spatial_tables;
+    const std::vector<double> m_no_weights;
 };
 
 void check_band(const BandView& coefficients, const std::vector<float>& noise_variance, const ImageBandShape& shape,
@@ -222,7 +271,14 @@ void coefficient_noise_variance(const BandView& noisy, const BandView& coefficie
     if (coefficients.frames >= noisy.frames)
         throw internal_error("coefficient_noise_variance: needs fewer modes than frames");
     const double degrees_of_freedom = noisy.frames - coefficients.frames;
-    std::vector<double> left(static_cast<std::size_t>(noisy.rows));
+    // This thread's band-sized scratch, kept from band to band (fresh buffers cost
+    // the kernel's page clearing every band); named once here because a
+    // thread_local named inside the workers' lambdas would be theirs.
+    static thread_local ScratchBuffer<double> this_thread_left, this_thread_horizontal;
+    ScratchBuffer<double>& left = this_thread_left;
+    ScratchBuffer<double>& horizontal = this_thread_horizontal;
+    left.resize(static_cast<std::size_t>(noisy.rows));
+    horizontal.resize(left.size());
     tbb::parallel_for(0, shape.height, [&](int y) {
         for (std::int64_t i = y * row_length; i < (y + 1) * row_length; ++i) {
             double energy = 0;
@@ -233,7 +289,6 @@ void coefficient_noise_variance(const BandView& noisy, const BandView& coefficie
             left[static_cast<std::size_t>(i)] = std::max(0.0, energy);
         }
     });
-    std::vector<double> horizontal(left.size());
     tbb::parallel_for(0, shape.height, [&](int y) {
         for (int x = 0; x < shape.width; ++x)
             for (int c = 0; c < shape.channels; ++c) {
@@ -295,6 +350,7 @@ void SureSurvey::add_band(const BandView& coefficients, const std::vector<float>
         double& noise = energy[m_modes];
         double* high_pass_energy = energy + m_modes + 1;
         WeightWindow window(guide, shape);
+        std::vector<double> applied(static_cast<std::size_t>(shape.channels));
         for (int x = 0; x < shape.width; x += m_stride) {
             const std::int64_t pixel = y * row_length + static_cast<std::int64_t>(x) * shape.channels;
             for (int c = 0; c < shape.channels; ++c) {
@@ -327,8 +383,9 @@ void SureSurvey::add_band(const BandView& coefficients, const std::vector<float>
                 for (int j = guided ? 1 : 0; j < m_modes; ++j) {
                     const float* image = coefficients.data + j * coefficients.frame_stride;
                     double* slot = fit_trace + (static_cast<std::size_t>(j) * candidates + k) * 2;
+                    window.apply_all(image, applied.data());
                     for (int c = 0; c < shape.channels; ++c) {
-                        const double difference = window.apply(image, c) / sum - image[pixel + c];
+                        const double difference = applied[static_cast<std::size_t>(c)] / sum - image[pixel + c];
                         slot[0] += difference * difference;
                         slot[1] += noise_variance[pixel + c] * self;
                     }
@@ -444,10 +501,13 @@ void filter_coefficients(const BandView& coefficients, const std::vector<float>&
     throw_if_cancelled();
     tbb::parallel_for(valid_y0, valid_y1, [&](int y) {
         WeightWindow window(guide, shape);
+        std::vector<double> applied(static_cast<std::size_t>(shape.channels));
         for (int x = 0; x < shape.width; ++x) {
             const std::int64_t pixel = y * row_length + static_cast<std::int64_t>(x) * shape.channels;
             const std::int64_t out = pixel - valid_y0 * row_length;
             const std::int64_t out_pixel = static_cast<std::int64_t>(y - valid_y0) * shape.width + x;
+            int windowed = -1;  // the candidate window.weights hold: modes often share one
+            double sum = 0, squares = 0;
             for (int j = 0; j < rank; ++j) {
                 const FilterCandidate& candidate = plan.candidates[plan.modes[j].candidate];
                 const float* image = coefficients.data + j * coefficients.frame_stride;
@@ -456,13 +516,17 @@ void filter_coefficients(const BandView& coefficients, const std::vector<float>&
                         filtered.at(out + c, j) = image[pixel + c];
                     continue;
                 }
-                const double sum = window.compute(candidate, x, y);
-                double squares = 0;
-                for (double weight : window.weights)
-                    squares += weight * weight;
+                if (plan.modes[j].candidate != windowed) {
+                    windowed = plan.modes[j].candidate;
+                    sum = window.compute(candidate, x, y);
+                    squares = 0;
+                    for (double weight : window.weights)
+                        squares += weight * weight;
+                }
                 gains[static_cast<std::size_t>(j * valid_pixels + out_pixel)] = static_cast<float>(squares / (sum * sum));
+                window.apply_all(image, applied.data());
                 for (int c = 0; c < shape.channels; ++c)
-                    filtered.at(out + c, j) = static_cast<float>(window.apply(image, c) / sum);
+                    filtered.at(out + c, j) = static_cast<float>(applied[static_cast<std::size_t>(c)] / sum);
             }
         }
     });
