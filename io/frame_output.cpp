@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <set>
 #include <system_error>
+#include <utility>
 #include <unistd.h>
 
 namespace modestack::io {
@@ -187,20 +188,25 @@ void FrameOutput::write_replaced_rows(int row_begin, int row_end, const unsigned
     thread_local std::vector<unsigned char> scratch;
     scratch.resize(pixels * out_bytes);
     unsigned char* out = scratch.data();
+    // Where and as what each written value goes in a pixel, looked up once per call
+    // rather than per value (this loop touches every value of every frame).
+    thread_local std::vector<std::pair<size_t, OIIO::TypeDesc>> replaced_places, extra_places;
+    replaced_places.clear();
+    for (size_t k = 0; k < replaced_count; ++k) {
+        int channel = source.selected[k];
+        replaced_places.emplace_back(source.byte_offset[channel], input_spec.channelformat(channel));
+    }
+    extra_places.clear();
+    for (size_t k = 0, offset = in_bytes; k < extra_count; offset += m_state->extra_types[k].size(), ++k)
+        extra_places.emplace_back(offset, m_state->extra_types[k]);
     for (size_t p = 0; p < pixels; ++p) {
         unsigned char* pixel = out + p * out_bytes;
         if (copy_input)
             std::memcpy(pixel, input_native + p * in_bytes, in_bytes);
-        for (size_t k = 0; k < replaced_count; ++k) {
-            int channel = source.selected[k];
-            store_value(replaced[p * replaced_count + k], input_spec.channelformat(channel),
-                        pixel + source.byte_offset[channel]);
-        }
-        unsigned char* tail = pixel + in_bytes;
-        for (size_t k = 0; k < extra_count; ++k) {
-            store_value(extra[p * extra_count + k], m_state->extra_types[k], tail);
-            tail += m_state->extra_types[k].size();
-        }
+        for (size_t k = 0; k < replaced_count; ++k)
+            store_value(replaced[p * replaced_count + k], replaced_places[k].second, pixel + replaced_places[k].first);
+        for (size_t k = 0; k < extra_count; ++k)
+            store_value(extra[p * extra_count + k], extra_places[k].second, pixel + extra_places[k].first);
     }
     const OIIO::ImageSpec& spec = m_state->spec;
     errno = 0;  // fail() reports the system's reason, e.g. a full disk
