@@ -619,9 +619,10 @@ private:
     // the coefficients (valid rows filtered and shrunk, halo rows as projected), the
     // unfiltered rebuild of the whole band (sigma's residual), s² and the kept-noise
     // gains of the valid rows. `residual` (optional; valid rows × N modes) receives
-    // the valid rows' unfiltered coefficient images before the filter changes them.
+    // the valid rows' unfiltered coefficient images before the filter changes them;
+    // `means` (optional; valid rows × F) each frame's windowed residual mean for sigma.
     void prepare_band(const Band& data, int row, int end, const RebuildBasis& modes,
-                      const lowrank::MutableBandView* residual, std::vector<float>* ranks)
+                      const lowrank::MutableBandView* residual, std::vector<float>* ranks, float* means = nullptr)
     {
         const int frames = m_shape.frames;
         const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
@@ -642,7 +643,7 @@ private:
         m_noise_variance.resize(static_cast<size_t>(valid));
         lowrank::residual_noise_variance(noisy, {m_rebuilt.data(), data.rows, frames, data.rows}, shape, modes.rank,
                                          row - data.row_begin, end - data.row_begin, m_confidence,
-                                         m_noise_variance.data());
+                                         m_noise_variance.data(), means);
         if (m_settings.mode_filter.enabled)
             filter_band(m_coefficients, data, modes.rebuild_modes, row, end, m_gains, ranks);
         for (size_t j = 0; j < m_report.shrinkage.size(); ++j)  // --shrink optimal, the band's own rows
@@ -698,11 +699,12 @@ private:
             int end = std::min(m_shape.height, row + plan.band_rows);
             Band& data = band_with_halo(band, row, end);
             throw_if_cancelled();
-            prepare_band(data, row, end, modes, nullptr, rank_map ? &ranks : nullptr);
             const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
-            lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
-            // Sigma of the band's own rows, frame by frame as a write task does it.
+            // Sigma of the band's own rows: prepare_band leaves each frame's windowed
+            // residual mean in it (the pass that finds s²), finished frame by frame.
             sigma.resize(static_cast<size_t>(valid) * frames);
+            prepare_band(data, row, end, modes, nullptr, rank_map ? &ranks : nullptr, sigma.data());
+            lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
             tbb::parallel_for(0, frames, [&](int t) {
                 std::vector<float>& kept_noise = m_kept_noise.local();  // nothing below runs in parallel
                 if (filter) {
@@ -710,10 +712,9 @@ private:
                     kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes, m_gains.data(), valid,
                                         kept_noise.data());
                 }
-                lowrank::frame_sigma(data.data + t * data.stride, m_rebuilt.data() + t * data.rows, shape,
-                                     row - data.row_begin, end - data.row_begin, m_confidence,
-                                     m_noise_variance.data(), modes.leverages(t), filter ? kept_noise.data() : nullptr,
-                                     sigma.data() + t * valid);
+                lowrank::sigma_from_mean(shape, row - data.row_begin, end - data.row_begin, m_confidence,
+                                         m_noise_variance.data(), modes.leverages(t),
+                                         filter ? kept_noise.data() : nullptr, sigma.data() + t * valid);
             });
             lowrank::MutableBandView output_view{m_rebuilt.data() + offset, valid, frames, data.rows};
             if (output > 0)  // the band's own rows from the changed coefficients

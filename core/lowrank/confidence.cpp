@@ -174,7 +174,8 @@ double window_size(const ImageBandShape& shape, int radius, int x, int y)
 } // namespace
 
 void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape, int rank,
-                             int valid_y0, int valid_y1, const ConfidenceOptions& options, float* noise_variance)
+                             int valid_y0, int valid_y1, const ConfidenceOptions& options, float* noise_variance,
+                             float* means)
 {
     check_band(noisy, rebuilt, shape, valid_y0, valid_y1, options.radius);
     const int frames = noisy.frames;
@@ -204,7 +205,7 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
             ResidualWindows windows(shape, options.radius, valid_y0, valid_y1);
             for (int t = range.begin(); t != range.end(); ++t)
                 windows.compute(noisy.data + t * noisy.frame_stride, rebuilt.data + t * rebuilt.frame_stride,
-                                nullptr, noise_power.data() + (t - group) * samples);
+                                means ? means + t * samples : nullptr, noise_power.data() + (t - group) * samples);
         });
         for_each_tile(samples, [&](std::int64_t row0, std::int64_t count) {
             for (int t = group; t < group_end; ++t) {
@@ -227,20 +228,42 @@ void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const Ima
         throw internal_error("frame_sigma: output rows outside the band");
     ResidualWindows windows(shape, options.radius, valid_y0, valid_y1);
     windows.compute(noisy_frame, rebuilt_frame, sigma, nullptr);
-    std::int64_t i = 0;
-    for (int y = valid_y0; y < valid_y1; ++y)
-        for (int x = 0; x < shape.width; ++x) {
-            const double window = window_size(shape, options.radius, x, y);
-            for (int c = 0; c < shape.channels; ++c, ++i) {
-                // The windowed mean of pure noise has variance s²(1 − h_t)/|W|; what the
-                // squared mean holds beyond that is coherent missed content.
-                const double mean = sigma[i], variance = noise_variance[i];
-                const double bias = std::max(
-                    0.0, mean * mean - options.bias_significance * variance * (1.0 - leverage) / window);
-                const double kept = kept_noise ? static_cast<double>(kept_noise[i]) : leverage;
-                sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias));
-            }
+    sigma_from_mean(shape, valid_y0, valid_y1, options, noise_variance, leverage, kept_noise, sigma);
+}
+
+void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1, const ConfidenceOptions& options,
+                     const float* noise_variance, double leverage, const float* kept_noise, float* sigma)
+{
+    // The windowed mean of pure noise has variance s²(1 − h_t)/|W|; what the
+    // squared mean holds beyond that is coherent missed content.
+    const auto finish = [&](std::int64_t first, std::int64_t last, double window) {
+        for (std::int64_t i = first; i < last; ++i) {
+            const double mean = sigma[i], variance = noise_variance[i];
+            const double bias =
+                std::max(0.0, mean * mean - options.bias_significance * variance * (1.0 - leverage) / window);
+            const double kept = kept_noise ? static_cast<double>(kept_noise[i]) : leverage;
+            sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias));
         }
+    };
+    const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
+    for (int y = valid_y0; y < valid_y1; ++y) {
+        const std::int64_t row = (y - valid_y0) * row_length;
+        // Pixels whose window is not clipped by the row's ends share one size: one
+        // run of samples the compiler can vectorise.
+        const int inner_first = std::min(options.radius, shape.width);
+        const int inner_last = std::max(inner_first, shape.width - options.radius);
+        for (int x = 0; x < shape.width; ++x) {
+            if (x == inner_first && inner_first < inner_last) {
+                finish(row + static_cast<std::int64_t>(inner_first) * shape.channels,
+                       row + static_cast<std::int64_t>(inner_last) * shape.channels,
+                       window_size(shape, options.radius, inner_first, y));
+                x = inner_last - 1;
+                continue;
+            }
+            const std::int64_t first = row + static_cast<std::int64_t>(x) * shape.channels;
+            finish(first, first + shape.channels, window_size(shape, options.radius, x, y));
+        }
+    }
 }
 
 void confidence_band(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,

@@ -66,8 +66,12 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
 /// some rows (modes task) or some frames of all rows (write task), giving the same
 /// bits as one call: s² of output rows [valid_y0, valid_y1) from every frame of
 /// the band (float per sample, laid out like one frame of `sigma`) ...
+/// With `means` (optional, laid out like `sigma`) it also leaves there each
+/// frame's windowed residual mean, the first half of frame_sigma's work, so that
+/// a whole run reads every residual once and finishes with sigma_from_mean ...
 void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape, int rank,
-                             int valid_y0, int valid_y1, const ConfidenceOptions& options, float* noise_variance);
+                             int valid_y0, int valid_y1, const ConfidenceOptions& options, float* noise_variance,
+                             float* means = nullptr);
 
 /// ... and sigma of one frame from its noisy and rebuilt values (whole band in
 /// `shape`), s² and the frame's leverage h_t, or its kept noise per sample
@@ -75,5 +79,10 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
 void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape, int valid_y0,
                  int valid_y1, const ConfidenceOptions& options, const float* noise_variance, double leverage,
                  const float* kept_noise, float* sigma);
+
+/// frame_sigma's second half: `sigma` holds the frame's windowed residual mean of
+/// the output rows on entry (from residual_noise_variance) and its sigma on return.
+void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1, const ConfidenceOptions& options,
+                     const float* noise_variance, double leverage, const float* kept_noise, float* sigma);
 
 } // namespace modestack::lowrank
