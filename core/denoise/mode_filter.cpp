@@ -280,14 +280,22 @@ void coefficient_noise_variance(const BandView& noisy, const BandView& coefficie
     left.resize(static_cast<std::size_t>(noisy.rows));
     horizontal.resize(left.size());
     tbb::parallel_for(0, shape.height, [&](int y) {
-        for (std::int64_t i = y * row_length; i < (y + 1) * row_length; ++i) {
-            double energy = 0;
-            for (int t = 0; t < noisy.frames; ++t)
-                energy += static_cast<double>(noisy.at(i, t)) * noisy.at(i, t);
-            for (int j = 0; j < coefficients.frames; ++j)
-                energy -= static_cast<double>(coefficients.at(i, j)) * coefficients.at(i, j);
-            left[static_cast<std::size_t>(i)] = std::max(0.0, energy);
+        // Frame by frame over the row (each frame's row is contiguous), each sample's
+        // sum still in frame order and then mode order.
+        double* energy = left.data() + y * row_length;
+        std::fill_n(energy, row_length, 0.0);
+        for (int t = 0; t < noisy.frames; ++t) {
+            const float* frame_row = noisy.data + t * noisy.frame_stride + y * row_length;
+            for (std::int64_t k = 0; k < row_length; ++k)
+                energy[k] += static_cast<double>(frame_row[k]) * frame_row[k];
         }
+        for (int j = 0; j < coefficients.frames; ++j) {
+            const float* mode_row = coefficients.data + j * coefficients.frame_stride + y * row_length;
+            for (std::int64_t k = 0; k < row_length; ++k)
+                energy[k] -= static_cast<double>(mode_row[k]) * mode_row[k];
+        }
+        for (std::int64_t k = 0; k < row_length; ++k)
+            energy[k] = std::max(0.0, energy[k]);
     });
     tbb::parallel_for(0, shape.height, [&](int y) {
         for (int x = 0; x < shape.width; ++x)
