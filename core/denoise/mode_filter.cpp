@@ -153,31 +153,29 @@ public:
     }
 
     // Σ_q w_q · image(q, c) over the window for every channel c into sums[c],
-    // image = [y][x][c] of the band: one pass over the weights for all channels,
-    // each sum in the order apply() takes.
+    // image = [y][x][c] of the band, each sum in the order apply() takes. RGB (the
+    // usual layer) in one pass over the weights, with its sums in registers.
     void apply_all(const float* image, double* sums) const
     {
-        const int channels = m_shape.channels;
-        if (channels > kMaximumChannels) {
-            for (int c = 0; c < channels; ++c)
+        if (m_shape.channels != 3) {
+            for (int c = 0; c < m_shape.channels; ++c)
                 sums[c] = apply(image, c);
             return;
         }
-        double local[kMaximumChannels] = {};
-        const std::int64_t row_length = static_cast<std::int64_t>(m_shape.width) * channels;
+        const std::int64_t row_length = static_cast<std::int64_t>(m_shape.width) * 3;
+        double red = 0, green = 0, blue = 0;
         std::size_t index = 0;
         for (int qy = y0; qy <= y1; ++qy) {
-            const float* row = image + qy * row_length + static_cast<std::int64_t>(x0) * channels;
-            for (int qx = x0; qx <= x1; ++qx, ++index, row += channels) {
+            const float* row = image + qy * row_length + static_cast<std::int64_t>(x0) * 3;
+            for (int qx = x0; qx <= x1; ++qx, ++index, row += 3) {
                 const double weight = weights[index];
-                for (int c = 0; c < channels; ++c)
-                    local[c] += weight * row[c];
+                red += weight * row[0];
+                green += weight * row[1];
+                blue += weight * row[2];
             }
         }
-        std::copy_n(local, channels, sums);
+        sums[0] = red, sums[1] = green, sums[2] = blue;
     }
-
-    static constexpr int kMaximumChannels = 4;
 
     // Σ_q w_q · image(q, c) over the window, image = [y][x][c] of the band.
     double apply(const float* image, int c) const
@@ -217,6 +215,61 @@ private:
     std::vector<std::pair<double, std::vector<double>>> m_spatial_tables;
     const std::vector<double> m_no_weights;
 };
+
+// A filter without a range or feature term is a Gaussian, separable also where
+// the band clips it (the clipped window is a box): it is applied as a horizontal
+// and a vertical pass, 2(2r+1) taps per sample instead of (2r+1)², with the
+// window's normalisation and noise gain Σw²/(Σw)² as products of the passes'.
+// Writes rows [valid_y0, valid_y1) of `image` filtered into `out` and each valid
+// pixel's gain into `gains`.
+void separable_gaussian(const float* image, const ImageBandShape& shape, int valid_y0, int valid_y1, double width,
+                        float* out, float* gains)
+{
+    const std::vector<double> taps = gaussian_1d(width);  // normalised: only ratios matter below
+    const int radius = kernel_radius(width);
+    const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
+    const int first_row = std::max(0, valid_y0 - radius), last_row = std::min(shape.height - 1, valid_y1 - 1 + radius);
+    // Σ taps and Σ taps² over the clipped window along one axis of `length` at `at`.
+    const auto clipped_sums = [&](int at, int length, double& sum, double& squares) {
+        sum = squares = 0;
+        for (int q = std::max(0, at - radius); q <= std::min(length - 1, at + radius); ++q)
+            sum += taps[q - at + radius], squares += taps[q - at + radius] * taps[q - at + radius];
+    };
+    std::vector<double> horizontal(static_cast<std::size_t>(last_row - first_row + 1) * row_length);
+    tbb::parallel_for(first_row, last_row + 1, [&](int y) {
+        const float* row = image + y * row_length;
+        double* target = horizontal.data() + (y - first_row) * row_length;
+        for (int x = 0; x < shape.width; ++x)
+            for (int c = 0; c < shape.channels; ++c) {
+                double sum = 0;
+                for (int q = std::max(0, x - radius); q <= std::min(shape.width - 1, x + radius); ++q)
+                    sum += taps[q - x + radius] * row[q * shape.channels + c];
+                target[x * shape.channels + c] = sum;
+            }
+    });
+    std::vector<double> column_sum(static_cast<std::size_t>(shape.width)), column_squares(column_sum.size());
+    for (int x = 0; x < shape.width; ++x)
+        clipped_sums(x, shape.width, column_sum[x], column_squares[x]);
+    tbb::parallel_for(valid_y0, valid_y1, [&](int y) {
+        double row_sum = 0, row_squares = 0;
+        clipped_sums(y, shape.height, row_sum, row_squares);
+        std::vector<double> sum(static_cast<std::size_t>(row_length), 0.0);
+        for (int q = std::max(0, y - radius); q <= std::min(shape.height - 1, y + radius); ++q) {
+            const double tap = taps[q - y + radius];
+            const double* source = horizontal.data() + (q - first_row) * row_length;
+            for (std::int64_t k = 0; k < row_length; ++k)
+                sum[static_cast<std::size_t>(k)] += tap * source[k];
+        }
+        float* target = out + (y - valid_y0) * row_length;
+        float* row_gains = gains + static_cast<std::int64_t>(y - valid_y0) * shape.width;
+        for (int x = 0; x < shape.width; ++x) {
+            const double total = column_sum[x] * row_sum;
+            for (int c = 0; c < shape.channels; ++c)
+                target[x * shape.channels + c] = static_cast<float>(sum[x * shape.channels + c] / total);
+            row_gains[x] = static_cast<float>(column_squares[x] * row_squares / (total * total));
+        }
+    });
+}
 
 void check_band(const BandView& coefficients, const std::vector<float>& noise_variance, const ImageBandShape& shape,
                 int valid_y0, int valid_y1, const char* what)
@@ -507,6 +560,19 @@ void filter_coefficients(const BandView& coefficients, const std::vector<float>&
         guide.features = features, guide.feature_channels = plan.feature_channels;
     }
     throw_if_cancelled();
+    // Modes whose filter has no range or feature term are filtered separably here;
+    // the per-pixel windows below do the others.
+    std::vector<bool> separable(static_cast<std::size_t>(rank), false);
+    for (int j = 0; j < rank; ++j) {
+        const FilterCandidate& candidate = plan.candidates[plan.modes[j].candidate];
+        const bool feature_term = candidate.feature_range > 0 && guide.features;
+        if (candidate.width <= 0 || candidate.range > 0 || feature_term)
+            continue;
+        separable[static_cast<std::size_t>(j)] = true;
+        separable_gaussian(coefficients.data + j * coefficients.frame_stride, shape, valid_y0, valid_y1,
+                           candidate.width, filtered.data + j * filtered.frame_stride,
+                           gains.data() + j * valid_pixels);
+    }
     tbb::parallel_for(valid_y0, valid_y1, [&](int y) {
         WeightWindow window(guide, shape);
         std::vector<double> applied(static_cast<std::size_t>(shape.channels));
@@ -517,6 +583,8 @@ void filter_coefficients(const BandView& coefficients, const std::vector<float>&
             int windowed = -1;  // the candidate window.weights hold: modes often share one
             double sum = 0, squares = 0;
             for (int j = 0; j < rank; ++j) {
+                if (separable[static_cast<std::size_t>(j)])
+                    continue;
                 const FilterCandidate& candidate = plan.candidates[plan.modes[j].candidate];
                 const float* image = coefficients.data + j * coefficients.frame_stride;
                 if (candidate.width <= 0) {

@@ -10,6 +10,7 @@
 #include <doctest/doctest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -165,6 +166,45 @@ TEST_CASE("mode filter: the guided filter keeps a step edge of the guide sharper
     };
     double gaussian = edge_error(1), guided = edge_error(2);
     CHECK(guided < 0.25 * gaussian);
+}
+
+TEST_CASE("mode filter: a plain Gaussian is the normalised window clipped at the band, with gain sum w2 over (sum w)2")
+{
+    // Rows 3-20 of a 40 × 24 band: the window is clipped at the left, right and
+    // bottom edges and at the top for the first rows; rank 2, mode 2 unfiltered.
+    const int width = 40, height = 24, valid_y0 = 3, valid_y1 = 21;
+    Images images = make_images(width, height, 2, 0.5, [&](int j, int x, int y) { return j == 0 ? x * 0.1 + y : 0.0; });
+    ModeFilterOptions options;
+    options.widths = {1.5};
+    ModeFilterPlan plan = survey(images, options, 2);
+    plan.modes[0].candidate = 1, plan.modes[1].candidate = 0;
+    REQUIRE(plan.candidates[1].width == 1.5);
+    REQUIRE(plan.candidates[1].range == 0);
+    const std::int64_t rows = std::int64_t(width) * (valid_y1 - valid_y0), pixels = std::int64_t(width) * height;
+    std::vector<float> filtered(static_cast<std::size_t>(rows) * 2), gains;
+    filter_coefficients(images.view(), images.variance, images.shape(), valid_y0, valid_y1, plan, 2,
+                        {filtered.data(), rows, 2, rows}, gains);
+    REQUIRE(gains.size() == static_cast<std::size_t>(rows) * 2);
+    double largest_error = 0, largest_gain_error = 0;
+    const int radius = static_cast<int>(std::ceil(2.5 * 1.5));
+    for (int y = valid_y0; y < valid_y1; ++y)
+        for (int x = 0; x < width; ++x) {
+            double sum = 0, squares = 0, weighted = 0;
+            for (int qy = std::max(0, y - radius); qy <= std::min(height - 1, y + radius); ++qy)
+                for (int qx = std::max(0, x - radius); qx <= std::min(width - 1, x + radius); ++qx) {
+                    const double w = std::exp(-0.5 * ((qx - x) * (qx - x) + (qy - y) * (qy - y)) / (1.5 * 1.5));
+                    sum += w, squares += w * w, weighted += w * images.noisy[std::size_t(qy) * width + qx];
+                }
+            const std::size_t out = std::size_t(y - valid_y0) * width + x;
+            largest_error = std::max(largest_error, std::abs(filtered[out] - weighted / sum));
+            largest_gain_error = std::max(largest_gain_error, std::abs(gains[out] - squares / (sum * sum)));
+            // Mode 2 is copied unfiltered, with gain 1.
+            CHECK(filtered[std::size_t(rows) + out] == images.noisy[std::size_t(pixels) + std::size_t(y) * width + x]);
+            CHECK(gains[std::size_t(rows) + out] == 1.0f);
+        }
+    MESSAGE("largest difference from the 2D window: " << largest_error << ", of the gain " << largest_gain_error);
+    CHECK(largest_error < 1e-5);
+    CHECK(largest_gain_error < 1e-6);
 }
 
 TEST_CASE("mode filter: the engine keeps a weak smooth mode that press drops, and the error falls")
