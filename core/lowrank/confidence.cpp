@@ -27,10 +27,10 @@ struct Rows {
 // The residual's white-noise part: r minus the mean of its 4-neighbours (clipped
 // at the band), squared and divided by the white-noise gain 1 + 1/n, so that its
 // expectation is the residual's noise variance σ²(1 − h_t). Lighting the modes miss
-// is smooth in space and mostly cancels here, unlike in r² itself.
-double high_pass_power(const Rows& residual, const ImageBandShape& shape, int y, std::int64_t k)
+// is smooth in space and mostly cancels here, unlike in r² itself. Sample k of row
+// y belongs to pixel x (passed, not divided out per sample).
+double high_pass_power(const Rows& residual, const ImageBandShape& shape, int x, int y, std::int64_t k)
 {
-    const int x = static_cast<int>(k / shape.channels);
     double neighbours = 0;
     int count = 0;
     if (x > 0)
@@ -137,10 +137,13 @@ public:
             return;
         power_buffer.resize(static_cast<std::size_t>((m_window_last - m_window_first + 1) * m_row_length));
         const Rows power_rows{power_buffer.data(), m_window_first, m_row_length};
-        for (int y = m_window_first; y <= m_window_last; ++y)
-            for (std::int64_t k = 0; k < m_row_length; ++k)
-                power_buffer[static_cast<std::size_t>((y - m_window_first) * m_row_length + k)] =
-                    high_pass_power(residual, m_shape, y, k);
+        for (int y = m_window_first; y <= m_window_last; ++y) {
+            double* power_row = power_buffer.data() + (y - m_window_first) * m_row_length;
+            std::int64_t k = 0;
+            for (int x = 0; x < m_shape.width; ++x)
+                for (int c = 0; c < m_shape.channels; ++c, ++k)
+                    power_row[k] = high_pass_power(residual, m_shape, x, y, k);
+        }
         windowed_mean(power_rows, m_shape, m_radius, m_valid_y0, m_valid_y1, power, column_sum, window_sum);
     }
 
