@@ -240,10 +240,10 @@ void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1, co
     // The windowed mean of pure noise has variance s²(1 − h_t)/|W|; what the
     // squared mean holds beyond that is coherent missed content.
     const auto finish = [&](std::int64_t first, std::int64_t last, double window) {
+        const double noise_share = options.bias_significance * (1.0 - leverage) / window;
         for (std::int64_t i = first; i < last; ++i) {
             const double mean = sigma[i], variance = noise_variance[i];
-            const double bias =
-                std::max(0.0, mean * mean - options.bias_significance * variance * (1.0 - leverage) / window);
+            const double bias = std::max(0.0, mean * mean - variance * noise_share);
             const double kept = kept_noise ? static_cast<double>(kept_noise[i]) : leverage;
             sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias));
         }
