@@ -1,5 +1,6 @@
 #include "core/lowrank/outliers.h"
 
+#include "core/lowrank/row_median.h"
 #include "core/lowrank/tiles.h"
 
 #include <algorithm>
@@ -9,39 +10,35 @@
 namespace modestack::lowrank {
 namespace {
 
-// Median of values[0..count) (reorders them).
-double median_of(std::vector<double>& values, std::size_t count)
-{
-    if (count == 0)
-        return 0.0;
-    const auto middle = values.begin() + static_cast<std::ptrdiff_t>(count / 2);
-    std::nth_element(values.begin(), middle, values.begin() + static_cast<std::ptrdiff_t>(count));
-    const double upper = *middle;
-    if (count % 2 == 1)
-        return upper;
-    const double lower = *std::max_element(values.begin(), middle);
-    return 0.5 * (lower + upper);
-}
-
 // Scratch for one row.
 struct RowScratch {
     std::vector<double> row;
-    std::vector<double> sorted;
+    std::vector<double> sorted;  // finite samples, |samples| or deviations: what a median is taken of
+    std::vector<double> select_a, select_b;  // row_median's work space
+
+    void resize(std::size_t frames)
+    {
+        for (std::vector<double>* buffer : {&row, &sorted, &select_a, &select_b})
+            buffer->resize(frames);
+    }
+    double median(const std::vector<double>& values, std::size_t count)
+    {
+        return row_median(values.data(), count, select_a.data(), select_b.data());
+    }
 };
 
 // Clamps the fireflies of scratch.row (see outliers.h); true when it changed it.
 bool clamp_fireflies(RowScratch& scratch, const OutlierOptions& options, OutlierCounts& counts)
 {
     const std::size_t frames = scratch.row.size();
-    std::copy(scratch.row.begin(), scratch.row.end(), scratch.sorted.begin());
-    const double median = median_of(scratch.sorted, frames);
+    const double median = scratch.median(scratch.row, frames);
     const auto [lowest, highest] = std::minmax_element(scratch.row.begin(), scratch.row.end());
     // The median of |x|: for a row with no negative value (radiance) that is the median.
     double typical_magnitude = median;
     if (*lowest < 0.0) {
         for (std::size_t t = 0; t < frames; ++t)
             scratch.sorted[t] = std::abs(scratch.row[t]);
-        typical_magnitude = median_of(scratch.sorted, frames);
+        typical_magnitude = scratch.median(scratch.sorted, frames);
     }
     const double floor_spread = std::max(options.mad_floor_fraction * typical_magnitude, 1e-30);
     const auto threshold_of = [&](double mad) {
@@ -62,7 +59,7 @@ bool clamp_fireflies(RowScratch& scratch, const OutlierOptions& options, Outlier
     }
     if (below < (frames + 1) / 2 && *highest <= threshold_of(enough))
         return false;
-    const double mad = median_of(scratch.sorted, frames);
+    const double mad = scratch.median(scratch.sorted, frames);
     const double threshold = threshold_of(mad);
     double excess = 0;
     for (double& value : scratch.row)
@@ -94,7 +91,7 @@ OutlierCounts clean_row(const MutableBandView& band, std::int64_t i, const float
     }
     bool changed = false;
     if (finite < static_cast<std::size_t>(frames)) {
-        const double median = median_of(scratch.sorted, finite);
+        const double median = scratch.median(scratch.sorted, finite);
         for (double& value : scratch.row)
             if (!std::isfinite(value)) {
                 value = median;
@@ -122,8 +119,7 @@ OutlierCounts clean_outliers(MutableBandView band, const OutlierOptions& options
     std::vector<OutlierCounts> per_tile(static_cast<std::size_t>(tiles));
     for_each_tile(band.rows, [&](std::int64_t row0, std::int64_t count) {
         RowScratch scratch;
-        scratch.row.resize(static_cast<std::size_t>(band.frames));
-        scratch.sorted.resize(static_cast<std::size_t>(band.frames));
+        scratch.resize(static_cast<std::size_t>(band.frames));
         OutlierCounts& tile_counts = per_tile[static_cast<std::size_t>(row0 / kTileRows)];
         // The rows are gathered kGatherRows at a time into [row][frame], one short
         // contiguous read per frame, rather than F reads F pages apart for each row.
@@ -166,8 +162,7 @@ void clean_marked_outliers(MutableBandView band, const OutlierOptions& options, 
             if (!changed_rows[i])
                 continue;
             if (scratch.row.empty()) {
-                scratch.row.resize(static_cast<std::size_t>(band.frames));
-                scratch.sorted.resize(static_cast<std::size_t>(band.frames));
+                scratch.resize(static_cast<std::size_t>(band.frames));
                 values.resize(static_cast<std::size_t>(band.frames));
             }
             for (int t = 0; t < band.frames; ++t)

@@ -7,5 +7,6 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/projection.cpp
   ${CMAKE_CURRENT_LIST_DIR}/randomized_svd.cpp
   ${CMAKE_CURRENT_LIST_DIR}/rank_rule.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/row_median.cpp
   ${CMAKE_CURRENT_LIST_DIR}/tiles.cpp)
 target_sources(modestack_core PRIVATE ${CMAKE_CURRENT_LIST_DIR}/shrinkage.cpp)
