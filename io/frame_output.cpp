@@ -2,6 +2,7 @@
 
 #include "core/common/error.h"
 #include "io/detail/open_frame.h"
+#include "io/half_conversion.h"
 #include "io/sequence_reader.h"
 #include "io/temporary_file.h"
 
@@ -9,7 +10,9 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <set>
@@ -72,12 +75,20 @@ HeaderAttribute HeaderAttribute::of_real(std::string name, double value)
     return attribute;
 }
 
+// Where in an output pixel a written value goes, and as what.
+struct ValuePlace {
+    size_t byte_offset = 0;
+    OIIO::TypeDesc type;
+};
+
 struct FrameOutput::State {
     std::unique_ptr<OIIO::ImageOutput> output;
     OIIO::ImageSpec spec;
     const detail::OpenFrame* source = nullptr;  ///< the copied input frame, if any
     std::vector<OIIO::TypeDesc> extra_types;
     size_t output_pixel_bytes = 0;
+    std::vector<ValuePlace> replaced_places, extra_places;  ///< of each replaced / extra value of a pixel
+    bool all_places_half = false;  ///< every written value is a half: converted a row at a time
 };
 
 FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, int frame_index,
@@ -102,6 +113,17 @@ FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, 
     spec.erase_attribute("openexr:lineOrder");
     add_attributes(spec, attributes);
     m_state->output_pixel_bytes = source.native_pixel_bytes + extra_channels.size() * extra_type.size();
+    for (int channel : source.selected)
+        m_state->replaced_places.push_back({source.byte_offset[channel], spec.channelformats[channel]});
+    size_t offset = source.native_pixel_bytes;
+    for (const OIIO::TypeDesc& type : m_state->extra_types) {
+        m_state->extra_places.push_back({offset, type});
+        offset += type.size();
+    }
+    m_state->all_places_half = true;
+    for (const auto* places : {&m_state->replaced_places, &m_state->extra_places})
+        for (const ValuePlace& place : *places)
+            m_state->all_places_half = m_state->all_places_half && place.type == OIIO::TypeDesc::HALF;
     open(&spec);
 }
 
@@ -179,7 +201,6 @@ void FrameOutput::write_replaced_rows(int row_begin, int row_end, const unsigned
     const OIIO::ImageSpec& input_spec = source.spec;
     size_t pixels = static_cast<size_t>(input_spec.width) * (row_end - row_begin);
     size_t in_bytes = source.native_pixel_bytes, out_bytes = m_state->output_pixel_bytes;
-    size_t replaced_count = source.selected.size(), extra_count = m_state->extra_types.size();
     // Without pass-through channels every input byte is overwritten: no input rows needed.
     const bool copy_input = needs_input_rows();
     if (copy_input && !input_native)
@@ -188,30 +209,56 @@ void FrameOutput::write_replaced_rows(int row_begin, int row_end, const unsigned
     thread_local std::vector<unsigned char> scratch;
     scratch.resize(pixels * out_bytes);
     unsigned char* out = scratch.data();
-    // Where and as what each written value goes in a pixel, looked up once per call
-    // rather than per value (this loop touches every value of every frame).
-    thread_local std::vector<std::pair<size_t, OIIO::TypeDesc>> replaced_places, extra_places;
-    replaced_places.clear();
-    for (size_t k = 0; k < replaced_count; ++k) {
-        int channel = source.selected[k];
-        replaced_places.emplace_back(source.byte_offset[channel], input_spec.channelformat(channel));
-    }
-    extra_places.clear();
-    for (size_t k = 0, offset = in_bytes; k < extra_count; offset += m_state->extra_types[k].size(), ++k)
-        extra_places.emplace_back(offset, m_state->extra_types[k]);
-    for (size_t p = 0; p < pixels; ++p) {
-        unsigned char* pixel = out + p * out_bytes;
-        if (copy_input)
-            std::memcpy(pixel, input_native + p * in_bytes, in_bytes);
-        for (size_t k = 0; k < replaced_count; ++k)
-            store_value(replaced[p * replaced_count + k], replaced_places[k].second, pixel + replaced_places[k].first);
-        for (size_t k = 0; k < extra_count; ++k)
-            store_value(extra[p * extra_count + k], extra_places[k].second, pixel + extra_places[k].first);
-    }
+    if (copy_input)
+        for (size_t p = 0; p < pixels; ++p)
+            std::memcpy(out + p * out_bytes, input_native + p * in_bytes, in_bytes);
+    if (m_state->all_places_half)
+        place_halves(pixels, replaced, extra, out);
+    else
+        place_values(pixels, replaced, extra, out);
     const OIIO::ImageSpec& spec = m_state->spec;
     errno = 0;  // fail() reports the system's reason, e.g. a full disk
     if (!m_state->output->write_scanlines(spec.y + row_begin, spec.y + row_end, spec.z, OIIO::TypeUnknown, out))
         fail(fmt::format("cannot write rows {}-{}", row_begin, row_end - 1));
+}
+
+// Half outputs (the common case) are converted in batches, a row at a time, then
+// placed: the batch conversion runs 8 values per instruction where the CPU can.
+void FrameOutput::place_halves(size_t pixels, const float* replaced, const float* extra, unsigned char* out) const
+{
+    const size_t out_bytes = m_state->output_pixel_bytes, width = static_cast<size_t>(m_state->spec.width);
+    thread_local std::vector<std::uint16_t> halves;
+    for (const auto& [values, places] : {std::pair{replaced, &m_state->replaced_places},
+                                         std::pair{extra, &m_state->extra_places}}) {
+        const size_t count = places->size();
+        if (count == 0)
+            continue;
+        halves.resize(width * count);
+        for (size_t row_start = 0; row_start < pixels; row_start += width) {
+            const size_t row_pixels = std::min(width, pixels - row_start);
+            floats_to_halves(values + row_start * count, halves.data(), row_pixels * count);
+            for (size_t p = 0; p < row_pixels; ++p) {
+                unsigned char* pixel = out + (row_start + p) * out_bytes;
+                for (size_t k = 0; k < count; ++k)
+                    std::memcpy(pixel + (*places)[k].byte_offset, &halves[p * count + k], sizeof(std::uint16_t));
+            }
+        }
+    }
+}
+
+void FrameOutput::place_values(size_t pixels, const float* replaced, const float* extra, unsigned char* out) const
+{
+    const size_t out_bytes = m_state->output_pixel_bytes;
+    const std::vector<ValuePlace>& replaced_places = m_state->replaced_places;
+    const std::vector<ValuePlace>& extra_places = m_state->extra_places;
+    for (size_t p = 0; p < pixels; ++p) {
+        unsigned char* pixel = out + p * out_bytes;
+        for (size_t k = 0; k < replaced_places.size(); ++k)
+            store_value(replaced[p * replaced_places.size() + k], replaced_places[k].type,
+                        pixel + replaced_places[k].byte_offset);
+        for (size_t k = 0; k < extra_places.size(); ++k)
+            store_value(extra[p * extra_places.size() + k], extra_places[k].type, pixel + extra_places[k].byte_offset);
+    }
 }
 
 bool FrameOutput::needs_input_rows() const

@@ -79,6 +79,9 @@ public:
 
 private:
     void open(const void* spec);
+    // Store the replaced and extra values of `pixels` pixels in the output pixels at `out`.
+    void place_halves(size_t pixels, const float* replaced, const float* extra, unsigned char* out) const;
+    void place_values(size_t pixels, const float* replaced, const float* extra, unsigned char* out) const;
     void fail(const std::string& what);
 
     std::string m_path;
