@@ -38,6 +38,56 @@ std::vector<double> gaussian_1d(double width)
     return kernel;
 }
 
+// Smooths `image` ([y][x][c] rows of the band) with the separable Gaussian of
+// `width`, clipped at the band's edges and renormalised by the clipped window's
+// weight (a box product, so still separable), and hands each smoothed row y of
+// [y0, y1) to row_done(y, values), from parallel workers.
+template <typename RowDone>
+void smooth_clipped(const float* image, const ImageBandShape& shape, double width, int y0, int y1, RowDone&& row_done)
+{
+    const std::vector<double> taps = gaussian_1d(width);
+    const int radius = kernel_radius(width);
+    const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
+    const int first_row = std::max(0, y0 - radius), last_row = std::min(shape.height - 1, y1 - 1 + radius);
+    const auto clipped_weight = [&](int at, int length) {
+        double sum = 0;
+        for (int q = std::max(0, at - radius); q <= std::min(length - 1, at + radius); ++q)
+            sum += taps[q - at + radius];
+        return sum;
+    };
+    std::vector<double> horizontal(static_cast<std::size_t>(last_row - first_row + 1) * row_length);
+    tbb::parallel_for(first_row, last_row + 1, [&](int y) {
+        const float* row = image + y * row_length;
+        double* target = horizontal.data() + (y - first_row) * row_length;
+        for (int x = 0; x < shape.width; ++x)
+            for (int c = 0; c < shape.channels; ++c) {
+                double sum = 0;
+                for (int q = std::max(0, x - radius); q <= std::min(shape.width - 1, x + radius); ++q)
+                    sum += taps[q - x + radius] * row[q * shape.channels + c];
+                target[x * shape.channels + c] = sum;
+            }
+    });
+    std::vector<double> column_weight(static_cast<std::size_t>(shape.width));
+    for (int x = 0; x < shape.width; ++x)
+        column_weight[static_cast<std::size_t>(x)] = clipped_weight(x, shape.width);
+    tbb::parallel_for(y0, y1, [&](int y) {
+        const double row_weight = clipped_weight(y, shape.height);
+        std::vector<double> sum(static_cast<std::size_t>(row_length), 0.0);
+        for (int q = std::max(0, y - radius); q <= std::min(shape.height - 1, y + radius); ++q) {
+            const double tap = taps[q - y + radius];
+            const double* source = horizontal.data() + (q - first_row) * row_length;
+            for (std::int64_t k = 0; k < row_length; ++k)
+                sum[static_cast<std::size_t>(k)] += tap * source[k];
+        }
+        for (int x = 0; x < shape.width; ++x) {
+            const double total = column_weight[static_cast<std::size_t>(x)] * row_weight;
+            for (int c = 0; c < shape.channels; ++c)
+                sum[static_cast<std::size_t>(x * shape.channels + c)] /= total;
+        }
+        row_done(y, static_cast<const double*>(sum.data()));
+    });
+}
+
 // The guide of a band: c_1 pre-smoothed (clipped and renormalised at the band's
 // edges) and the noise variance of each of its samples.
 struct Guide {
@@ -60,33 +110,14 @@ Guide build_guide(const BandView& coefficients, const std::vector<float>& noise_
             guide.value[i] = coefficients.data[i], guide.noise[i] = noise_variance[i];
         return guide;
     }
-    const std::vector<double> kernel = gaussian_1d(smoothing);
-    const int radius = kernel_radius(smoothing);
     double gain_1d = 0;  // Σ k²: the white-noise variance gain per dimension (interior)
-    for (double value : kernel)
+    for (double value : gaussian_1d(smoothing))
         gain_1d += value * value;
-    std::vector<double> horizontal(samples);
-    tbb::parallel_for(0, shape.height, [&](int y) {
-        for (int x = 0; x < shape.width; ++x)
-            for (int c = 0; c < shape.channels; ++c) {
-                double sum = 0, weight = 0;
-                for (int q = std::max(0, x - radius); q <= std::min(shape.width - 1, x + radius); ++q) {
-                    sum += kernel[q - x + radius] * coefficients.data[y * row_length + q * shape.channels + c];
-                    weight += kernel[q - x + radius];
-                }
-                horizontal[y * row_length + x * shape.channels + c] = sum / weight;
-            }
-    });
-    tbb::parallel_for(0, shape.height, [&](int y) {
-        for (std::int64_t k = 0; k < row_length; ++k) {
-            double sum = 0, weight = 0;
-            for (int q = std::max(0, y - radius); q <= std::min(shape.height - 1, y + radius); ++q) {
-                sum += kernel[q - y + radius] * horizontal[q * row_length + k];
-                weight += kernel[q - y + radius];
-            }
-            guide.value[y * row_length + k] = sum / weight;
-            guide.noise[y * row_length + k] = noise_variance[y * row_length + k] * gain_1d * gain_1d;
-        }
+    smooth_clipped(coefficients.data, shape, smoothing, 0, shape.height, [&](int y, const double* row) {
+        const std::int64_t first = y * row_length;
+        std::copy(row, row + row_length, guide.value.begin() + first);
+        for (std::int64_t k = first; k < first + row_length; ++k)
+            guide.noise[static_cast<std::size_t>(k)] = noise_variance[static_cast<std::size_t>(k)] * gain_1d * gain_1d;
     });
     return guide;
 }
@@ -119,7 +150,7 @@ public:
         // Without a range or feature term the weight depends on the squared distance
         // alone: looked up, not an exp per tap (the same values).
         const bool unguided = range_scale == 0 && feature_scale == 0;
-        const std::vector<double>& spatial = unguided ? spatial_weights(candidate.width, radius) : m_no_weights;
+        const double* spatial = unguided ? spatial_weights(candidate.width, radius).data() : nullptr;
         double sum = 0;
         std::size_t index = 0;
         for (int qy = y0; qy <= y1; ++qy)
@@ -148,7 +179,7 @@ public:
                 }
                 // A guided weight in float precision (1e-7) is plenty for a filter
                 // weight, and expf costs a fraction of exp.
-                sum += weights[index] = unguided ? spatial[static_cast<std::size_t>(distance2)]
+                sum += weights[index] = unguided ? spatial[distance2]
                                                  : std::exp(static_cast<float>(exponent));
             }
         self = static_cast<std::size_t>(y - y0) * (x1 - x0 + 1) + (x - x0);
@@ -216,7 +247,6 @@ private:
     const Guide& m_guide;
     const ImageBandShape& m_shape;
     std::vector<std::pair<double, std::vector<double>>> m_spatial_tables;
-    const std::vector<double> m_no_weights;
 };
 
 // A filter without a range or feature term is a Gaussian, separable also where
@@ -231,44 +261,24 @@ void separable_gaussian(const float* image, const ImageBandShape& shape, int val
     const std::vector<double> taps = gaussian_1d(width);  // normalised: only ratios matter below
     const int radius = kernel_radius(width);
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
-    const int first_row = std::max(0, valid_y0 - radius), last_row = std::min(shape.height - 1, valid_y1 - 1 + radius);
     // Σ taps and Σ taps² over the clipped window along one axis of `length` at `at`.
     const auto clipped_sums = [&](int at, int length, double& sum, double& squares) {
         sum = squares = 0;
         for (int q = std::max(0, at - radius); q <= std::min(length - 1, at + radius); ++q)
             sum += taps[q - at + radius], squares += taps[q - at + radius] * taps[q - at + radius];
     };
-    std::vector<double> horizontal(static_cast<std::size_t>(last_row - first_row + 1) * row_length);
-    tbb::parallel_for(first_row, last_row + 1, [&](int y) {
-        const float* row = image + y * row_length;
-        double* target = horizontal.data() + (y - first_row) * row_length;
-        for (int x = 0; x < shape.width; ++x)
-            for (int c = 0; c < shape.channels; ++c) {
-                double sum = 0;
-                for (int q = std::max(0, x - radius); q <= std::min(shape.width - 1, x + radius); ++q)
-                    sum += taps[q - x + radius] * row[q * shape.channels + c];
-                target[x * shape.channels + c] = sum;
-            }
-    });
     std::vector<double> column_sum(static_cast<std::size_t>(shape.width)), column_squares(column_sum.size());
     for (int x = 0; x < shape.width; ++x)
         clipped_sums(x, shape.width, column_sum[x], column_squares[x]);
-    tbb::parallel_for(valid_y0, valid_y1, [&](int y) {
+    smooth_clipped(image, shape, width, valid_y0, valid_y1, [&](int y, const double* row) {
         double row_sum = 0, row_squares = 0;
         clipped_sums(y, shape.height, row_sum, row_squares);
-        std::vector<double> sum(static_cast<std::size_t>(row_length), 0.0);
-        for (int q = std::max(0, y - radius); q <= std::min(shape.height - 1, y + radius); ++q) {
-            const double tap = taps[q - y + radius];
-            const double* source = horizontal.data() + (q - first_row) * row_length;
-            for (std::int64_t k = 0; k < row_length; ++k)
-                sum[static_cast<std::size_t>(k)] += tap * source[k];
-        }
         float* target = out + (y - valid_y0) * row_length;
+        for (std::int64_t k = 0; k < row_length; ++k)
+            target[k] = static_cast<float>(row[k]);
         float* row_gains = gains + static_cast<std::int64_t>(y - valid_y0) * shape.width;
         for (int x = 0; x < shape.width; ++x) {
             const double total = column_sum[x] * row_sum;
-            for (int c = 0; c < shape.channels; ++c)
-                target[x * shape.channels + c] = static_cast<float>(sum[x * shape.channels + c] / total);
             row_gains[x] = static_cast<float>(column_squares[x] * row_squares / (total * total));
         }
     });
