@@ -47,6 +47,22 @@ double high_pass_power(const Rows& residual, const ImageBandShape& shape, int x,
     return difference * difference / (1.0 + 1.0 / count);
 }
 
+// Visits the pixels of a row `width` long by how their window of `radius` meets
+// the row's ends: edge_pixel(x) for each clipped one, inner_run(first, end) once
+// for the unclipped ones [first, end), which share a window shape and so can be
+// done as one run the compiler vectorises.
+template <typename EdgePixel, typename InnerRun>
+void for_each_window_shape(int width, int radius, EdgePixel&& edge_pixel, InnerRun&& inner_run)
+{
+    const int first = std::min(radius, width), end = std::max(first, width - radius);
+    for (int x = 0; x < first; ++x)
+        edge_pixel(x);
+    if (first < end)
+        inner_run(first, end);
+    for (int x = end; x < width; ++x)
+        edge_pixel(x);
+}
+
 // Writes the mean over the (2·radius+1)² window (clipped at the band) of
 // sample(y, k) for the output rows of frame t into `out`'s frame t.
 void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, int valid_y0, int valid_y1,
@@ -62,13 +78,11 @@ void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, 
                 column_sum[static_cast<std::size_t>(k)] += sample(source_y, k);
         const int rows_in_window = y_last - y_first + 1;
         float* out_row = out_frame + (y - valid_y0) * row_length;
-        // Pixels whose window lies inside the row: all their samples at once, summed
-        // in the order of the loop below (which does the clipped ones), so that the
-        // compiler can vectorise it.
-        const int inner_first = std::min(radius, shape.width), inner_last = shape.width - 1 - radius;
-        if (inner_first <= inner_last) {
+        // The inner run sums all its samples at once, in the order of the edge
+        // pixels' loop (the same bits as summing each window alone).
+        const auto inner_run = [&](int inner_first, int inner_end) {
             const std::int64_t first = static_cast<std::int64_t>(inner_first) * shape.channels;
-            const std::int64_t last = static_cast<std::int64_t>(inner_last + 1) * shape.channels;
+            const std::int64_t last = static_cast<std::int64_t>(inner_end) * shape.channels;
             const double count = static_cast<double>(rows_in_window) * (2 * radius + 1);
             std::fill(window_sum.begin() + first, window_sum.begin() + last, 0.0);
             for (int d = -radius; d <= radius; ++d) {
@@ -78,12 +92,8 @@ void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, 
             }
             for (std::int64_t k = first; k < last; ++k)
                 out_row[k] = static_cast<float>(window_sum[static_cast<std::size_t>(k)] / count);
-        }
-        for (int x = 0; x < shape.width; ++x) {
-            if (x == inner_first && inner_first <= inner_last)
-                x = inner_last + 1;
-            if (x >= shape.width)
-                break;
+        };
+        const auto edge_pixel = [&](int x) {
             const int x_first = std::max(0, x - radius);
             const int x_last = std::min(shape.width - 1, x + radius);
             const double count = static_cast<double>(rows_in_window) * (x_last - x_first + 1);
@@ -93,7 +103,8 @@ void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, 
                     sum += column_sum[static_cast<std::size_t>(source_x * shape.channels + c)];
                 out_row[x * shape.channels + c] = static_cast<float>(sum / count);
             }
-        }
+        };
+        for_each_window_shape(shape.width, radius, edge_pixel, inner_run);
     }
 }
 
@@ -251,21 +262,17 @@ void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1, co
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
     for (int y = valid_y0; y < valid_y1; ++y) {
         const std::int64_t row = (y - valid_y0) * row_length;
-        // Pixels whose window is not clipped by the row's ends share one size: one
-        // run of samples the compiler can vectorise.
-        const int inner_first = std::min(options.radius, shape.width);
-        const int inner_last = std::max(inner_first, shape.width - options.radius);
-        for (int x = 0; x < shape.width; ++x) {
-            if (x == inner_first && inner_first < inner_last) {
+        for_each_window_shape(
+            shape.width, options.radius,
+            [&](int x) {
+                const std::int64_t first = row + static_cast<std::int64_t>(x) * shape.channels;
+                finish(first, first + shape.channels, window_size(shape, options.radius, x, y));
+            },
+            [&](int inner_first, int inner_end) {
                 finish(row + static_cast<std::int64_t>(inner_first) * shape.channels,
-                       row + static_cast<std::int64_t>(inner_last) * shape.channels,
+                       row + static_cast<std::int64_t>(inner_end) * shape.channels,
                        window_size(shape, options.radius, inner_first, y));
-                x = inner_last - 1;
-                continue;
-            }
-            const std::int64_t first = row + static_cast<std::int64_t>(x) * shape.channels;
-            finish(first, first + shape.channels, window_size(shape, options.radius, x, y));
-        }
+            });
     }
 }
 
