@@ -41,8 +41,10 @@ BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int h
 
 /// Bytes of one image row of the input of every frame (a read band or the kept shot).
 std::int64_t input_bytes_per_row(const ShotShape& shape);
-/// Bytes of pass 2's buffers per image row of a band: rebuilt, sigma and its
-/// noise power for every frame, plus `modes` per-sample images.
+/// Bytes of pass 2's buffers per image row of a band: rebuilt and sigma for every
+/// frame, a third per-frame share for sigma's noise-power scratch (which holds 16
+/// frames at a time: the share leaves room for the rest of pass 2's scratch), plus
+/// `modes` per-sample images.
 std::int64_t work_bytes_per_row(const ShotShape& shape, int modes);
 
 }  // namespace modestack::denoise
