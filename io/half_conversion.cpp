@@ -2,7 +2,6 @@
 
 #include <Imath/half.h>
 
-
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #include <immintrin.h>
 #define MODESTACK_HAVE_F16C_PATH 1
@@ -15,6 +14,15 @@ void imath_floats_to_halves(const float* values, std::uint16_t* halves, std::siz
 {
     for (std::size_t i = 0; i < count; ++i)
         halves[i] = Imath::half(values[i]).bits();
+}
+
+void imath_halves_to_floats(const std::uint16_t* halves, float* values, std::size_t count)
+{
+    for (std::size_t i = 0; i < count; ++i) {
+        Imath::half value;
+        value.setBits(halves[i]);
+        values[i] = static_cast<float>(value);
+    }
 }
 
 #ifdef MODESTACK_HAVE_F16C_PATH
@@ -38,10 +46,32 @@ __attribute__((target("avx,f16c"))) void f16c_floats_to_halves(const float* valu
     imath_floats_to_halves(values + i, halves + i, count - i);
 }
 
-bool cpu_has_f16c()
+// F16C makes a signalling NaN quiet, Imath keeps its bits: blocks holding a NaN
+// (or an infinity: same exponent) go through Imath.
+__attribute__((target("avx,f16c"))) void f16c_halves_to_floats(const std::uint16_t* halves, float* values,
+                                                               std::size_t count)
 {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx") && __builtin_cpu_supports("f16c");
+    std::size_t i = 0;
+    const __m128i exponent = _mm_set1_epi16(0x7C00);
+    for (; i + 8 <= count; i += 8) {
+        const __m128i block = _mm_loadu_si128(reinterpret_cast<const __m128i*>(halves + i));
+        const __m128i top_exponent = _mm_cmpeq_epi16(_mm_and_si128(block, exponent), exponent);
+        if (_mm_movemask_epi8(top_exponent) != 0) {
+            imath_halves_to_floats(halves + i, values + i, 8);
+            continue;
+        }
+        _mm256_storeu_ps(values + i, _mm256_cvtph_ps(block));
+    }
+    imath_halves_to_floats(halves + i, values + i, count - i);
+}
+
+bool use_f16c()
+{
+    static const bool available = [] {
+        __builtin_cpu_init();
+        return __builtin_cpu_supports("avx") && __builtin_cpu_supports("f16c");
+    }();
+    return available;
 }
 #endif
 
@@ -50,13 +80,23 @@ bool cpu_has_f16c()
 void floats_to_halves(const float* values, std::uint16_t* halves, std::size_t count)
 {
 #ifdef MODESTACK_HAVE_F16C_PATH
-    static const bool use_f16c = cpu_has_f16c();
-    if (use_f16c) {
+    if (use_f16c()) {
         f16c_floats_to_halves(values, halves, count);
         return;
     }
 #endif
     imath_floats_to_halves(values, halves, count);
+}
+
+void halves_to_floats(const std::uint16_t* halves, float* values, std::size_t count)
+{
+#ifdef MODESTACK_HAVE_F16C_PATH
+    if (use_f16c()) {
+        f16c_halves_to_floats(halves, values, count);
+        return;
+    }
+#endif
+    imath_halves_to_floats(halves, values, count);
 }
 
 } // namespace modestack::io

@@ -4,11 +4,13 @@
 #include "io/detail/open_frame.h"
 #include "io/detail/open_image.h"
 #include "io/frame_header.h"
+#include "io/half_conversion.h"
 
 #include <Imath/half.h>
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <cstdint>
 #include <cstring>
 
 namespace modestack::io {
@@ -128,6 +130,17 @@ void SequenceReader::read_selected(int frame_index, int row_begin, int row_end, 
     bool contiguous = channel_end - channel_begin == static_cast<int>(selected.size());
     for (size_t i = 1; contiguous && i < selected.size(); ++i)
         contiguous = selected[i] == selected[i - 1] + 1;
+    bool all_half = true;
+    for (int channel : selected)
+        all_half = all_half && frame.spec.channelformat(channel) == OIIO::TypeHalf;
+    if (contiguous && all_half) {  // EXR's usual case: converted 8 values per instruction where the CPU can
+        thread_local std::vector<std::uint16_t> halves;
+        const size_t values = static_cast<size_t>(m_width) * (row_end - row_begin) * selected.size();
+        halves.resize(values);
+        read_rows(frame, row_begin, row_end, channel_begin, channel_end, OIIO::TypeUnknown, halves.data());
+        halves_to_floats(halves.data(), destination, values);
+        return;
+    }
     if (contiguous) {
         read_rows(frame, row_begin, row_end, channel_begin, channel_end, OIIO::TypeFloat, destination);
         return;
