@@ -3,6 +3,7 @@
 #include <Imath/half.h>
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <cpuid.h>
 #include <immintrin.h>
 #define MODESTACK_HAVE_F16C_PATH 1
 #endif
@@ -65,11 +66,19 @@ __attribute__((target("avx,f16c"))) void f16c_halves_to_floats(const std::uint16
     imath_halves_to_floats(halves + i, values + i, count - i);
 }
 
+// From CPUID, not __builtin_cpu_supports: clang 14's does not know "f16c".
 bool use_f16c()
 {
     static const bool available = [] {
-        __builtin_cpu_init();
-        return __builtin_cpu_supports("avx") && __builtin_cpu_supports("f16c");
+        unsigned eax = 0, ebx = 0, ecx = 0, edx = 0;
+        if (!__get_cpuid(1, &eax, &ebx, &ecx, &edx))
+            return false;
+        constexpr unsigned kOsSavesState = 1u << 27, kAvx = 1u << 28, kF16c = 1u << 29;
+        if ((ecx & (kOsSavesState | kAvx | kF16c)) != (kOsSavesState | kAvx | kF16c))
+            return false;
+        unsigned low = 0, high = 0;  // XCR0: the OS saves the SSE and AVX registers
+        __asm__("xgetbv" : "=a"(low), "=d"(high) : "c"(0));
+        return (low & 6u) == 6u;
     }();
     return available;
 }
