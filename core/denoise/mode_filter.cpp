@@ -38,6 +38,15 @@ std::vector<double> gaussian_1d(double width)
     return kernel;
 }
 
+// Σ taps and Σ taps² over the part of a window of `radius` centred at `at` that
+// lies inside [0, length): a window's weight and noise gain where the band clips it.
+void clipped_tap_sums(const std::vector<double>& taps, int radius, int at, int length, double& sum, double& squares)
+{
+    sum = squares = 0;
+    for (int q = std::max(0, at - radius); q <= std::min(length - 1, at + radius); ++q)
+        sum += taps[q - at + radius], squares += taps[q - at + radius] * taps[q - at + radius];
+}
+
 // Smooths `image` ([y][x][c] rows of the band) with the separable Gaussian of
 // `width`, clipped at the band's edges and renormalised by the clipped window's
 // weight (a box product, so still separable), and hands each smoothed row y of
@@ -50,9 +59,8 @@ void smooth_clipped(const float* image, const ImageBandShape& shape, double widt
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
     const int first_row = std::max(0, y0 - radius), last_row = std::min(shape.height - 1, y1 - 1 + radius);
     const auto clipped_weight = [&](int at, int length) {
-        double sum = 0;
-        for (int q = std::max(0, at - radius); q <= std::min(length - 1, at + radius); ++q)
-            sum += taps[q - at + radius];
+        double sum = 0, squares = 0;
+        clipped_tap_sums(taps, radius, at, length, sum, squares);
         return sum;
     };
     std::vector<double> horizontal(static_cast<std::size_t>(last_row - first_row + 1) * row_length);
@@ -261,18 +269,12 @@ void separable_gaussian(const float* image, const ImageBandShape& shape, int val
     const std::vector<double> taps = gaussian_1d(width);  // normalised: only ratios matter below
     const int radius = kernel_radius(width);
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
-    // Σ taps and Σ taps² over the clipped window along one axis of `length` at `at`.
-    const auto clipped_sums = [&](int at, int length, double& sum, double& squares) {
-        sum = squares = 0;
-        for (int q = std::max(0, at - radius); q <= std::min(length - 1, at + radius); ++q)
-            sum += taps[q - at + radius], squares += taps[q - at + radius] * taps[q - at + radius];
-    };
     std::vector<double> column_sum(static_cast<std::size_t>(shape.width)), column_squares(column_sum.size());
     for (int x = 0; x < shape.width; ++x)
-        clipped_sums(x, shape.width, column_sum[x], column_squares[x]);
+        clipped_tap_sums(taps, radius, x, shape.width, column_sum[x], column_squares[x]);
     smooth_clipped(image, shape, width, valid_y0, valid_y1, [&](int y, const double* row) {
         double row_sum = 0, row_squares = 0;
-        clipped_sums(y, shape.height, row_sum, row_squares);
+        clipped_tap_sums(taps, radius, y, shape.height, row_sum, row_squares);
         float* target = out + (y - valid_y0) * row_length;
         for (std::int64_t k = 0; k < row_length; ++k)
             target[k] = static_cast<float>(row[k]);
