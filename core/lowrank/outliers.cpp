@@ -13,12 +13,12 @@ namespace {
 // Scratch for one row.
 struct RowScratch {
     std::vector<double> row;
-    std::vector<double> sorted;  // finite samples, |samples| or deviations: what a median is taken of
+    std::vector<double> to_median;  // the finite samples, |samples| or deviations a median is taken of
     std::vector<double> select_a, select_b;  // row_median's work space
 
     void resize(std::size_t frames)
     {
-        for (std::vector<double>* buffer : {&row, &sorted, &select_a, &select_b})
+        for (std::vector<double>* buffer : {&row, &to_median, &select_a, &select_b})
             buffer->resize(frames);
     }
     double median(const std::vector<double>& values, std::size_t count)
@@ -37,8 +37,8 @@ bool clamp_fireflies(RowScratch& scratch, const OutlierOptions& options, Outlier
     double typical_magnitude = median;
     if (*lowest < 0.0) {
         for (std::size_t t = 0; t < frames; ++t)
-            scratch.sorted[t] = std::abs(scratch.row[t]);
-        typical_magnitude = scratch.median(scratch.sorted, frames);
+            scratch.to_median[t] = std::abs(scratch.row[t]);
+        typical_magnitude = scratch.median(scratch.to_median, frames);
     }
     const double floor_spread = std::max(options.mad_floor_fraction * typical_magnitude, 1e-30);
     const auto threshold_of = [&](double mad) {
@@ -54,12 +54,12 @@ bool clamp_fireflies(RowScratch& scratch, const OutlierOptions& options, Outlier
     std::size_t below = 0;
     const double enough = (*highest - median) / (options.firefly_k * 1.4826);
     for (std::size_t t = 0; t < frames; ++t) {
-        scratch.sorted[t] = std::abs(scratch.row[t] - median);
-        below += scratch.sorted[t] < enough ? 1 : 0;
+        scratch.to_median[t] = std::abs(scratch.row[t] - median);
+        below += scratch.to_median[t] < enough ? 1 : 0;
     }
     if (below < (frames + 1) / 2 && *highest <= threshold_of(enough))
         return false;
-    const double mad = scratch.median(scratch.sorted, frames);
+    const double mad = scratch.median(scratch.to_median, frames);
     const double threshold = threshold_of(mad);
     double excess = 0;
     for (double& value : scratch.row)
@@ -87,11 +87,11 @@ OutlierCounts clean_row(const MutableBandView& band, std::int64_t i, const float
         const double value = values[t];
         scratch.row[static_cast<std::size_t>(t)] = value;
         if (std::isfinite(value))
-            scratch.sorted[finite++] = value;
+            scratch.to_median[finite++] = value;
     }
     bool changed = false;
     if (finite < static_cast<std::size_t>(frames)) {
-        const double median = scratch.median(scratch.sorted, finite);
+        const double median = scratch.median(scratch.to_median, finite);
         for (double& value : scratch.row)
             if (!std::isfinite(value)) {
                 value = median;
