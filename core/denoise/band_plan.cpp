@@ -9,9 +9,28 @@
 namespace modestack::denoise {
 namespace {
 
+// Sigma's scratch per sample of a band's rows: s² (float), its sum over frames
+// (double) and the windowed noise power of a group of 16 frames (core/lowrank/confidence.cpp).
+constexpr int kSigmaScratchImages = 1 + 2 + 16;
+
 std::int64_t samples_per_row(const ShotShape& shape) { return static_cast<std::int64_t>(shape.width) * shape.channels; }
 
 std::int64_t mebibytes_rounded_up(std::int64_t bytes) { return (bytes + (1 << 20) - 1) >> 20; }
+
+// The largest band height that `fits`: a multiple of kChunkRows, or `limit`
+// itself; at least the smallest band (the caller checked that it fits).
+template <typename Fits>
+int largest_band(int limit, const Fits& fits)
+{
+    int best = std::min(kChunkRows, limit);
+    for (int rows = best; rows < limit;) {
+        rows = std::min(rows + kChunkRows, limit);
+        if (!fits(rows))
+            break;
+        best = rows;
+    }
+    return best;
+}
 
 }  // namespace
 
@@ -20,41 +39,47 @@ std::int64_t input_bytes_per_row(const ShotShape& shape)
     return samples_per_row(shape) * static_cast<std::int64_t>(sizeof(float)) * shape.frames;
 }
 
-std::int64_t work_bytes_per_row(const ShotShape& shape, int modes)
+std::int64_t pass_two_bytes(const ShotShape& shape, const PassNeeds& needs, int band_rows, bool sigma_apart)
 {
-    return samples_per_row(shape) * static_cast<std::int64_t>(sizeof(float)) *
-           (3 * static_cast<std::int64_t>(shape.frames) + modes);
+    const std::int64_t frames = shape.frames;
+    const std::int64_t images = frames * (band_rows + 2 * needs.sigma_halo_rows) +
+                                static_cast<std::int64_t>(needs.halo_images) * (band_rows + 2 * needs.halo_rows) +
+                                (needs.band_images + kSigmaScratchImages + (sigma_apart ? frames : 0)) * band_rows;
+    return images * samples_per_row(shape) * static_cast<std::int64_t>(sizeof(float));
 }
 
-BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int halo_rows, int modes,
-                    std::int64_t source_row_bytes)
+BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, const PassNeeds& needs)
 {
     BandPlan plan;
-    plan.halo_rows = halo_rows;
+    plan.halo_rows = needs.halo_rows;
     plan.budget_bytes = max_memory_bytes;
-    const std::int64_t input_row = input_bytes_per_row(shape), work_row = work_bytes_per_row(shape, modes);
+    const std::int64_t input_row = input_bytes_per_row(shape);
+    const int smallest_band = std::min(kChunkRows, shape.height);
     const std::int64_t kept = input_row * shape.height;
-    const std::int64_t smallest_work = work_row * (std::min(kChunkRows, shape.height) + 2 * halo_rows);
-    if (kept + smallest_work <= max_memory_bytes) {
+    // The kept shot: the largest band (a multiple of kChunkRows, at most
+    // kMaxKeptBandRows) whose pass 2 fits beside it.
+    if (kept + pass_two_bytes(shape, needs, smallest_band, true) <= max_memory_bytes) {
         plan.in_memory = true;
-        std::int64_t rows = (max_memory_bytes - kept) / work_row - 2 * halo_rows;
-        rows = std::min<std::int64_t>({rows / kChunkRows * kChunkRows, kMaxKeptBandRows, shape.height});
-        plan.band_rows = static_cast<int>(std::max<std::int64_t>(rows, std::min(kChunkRows, shape.height)));
-        plan.estimated_bytes = kept + work_row * (plan.band_rows + 2 * halo_rows);
+        plan.band_rows = largest_band(std::min(kMaxKeptBandRows, shape.height), [&](int rows) {
+            return kept + pass_two_bytes(shape, needs, rows, true) <= max_memory_bytes;
+        });
+        plan.estimated_bytes = kept + pass_two_bytes(shape, needs, plan.band_rows, true);
         return plan;
     }
-    // Streaming: a read band, pass 2's buffers and the source's rows, and the outlier marks.
-    const std::int64_t per_row = input_row + work_row + source_row_bytes;
+    // Streaming: a read band with its halo and the source's rows, pass 2's
+    // buffers and the outlier marks.
     const std::int64_t marks = samples_per_row(shape) * shape.height;
-    std::int64_t rows = (max_memory_bytes - marks) / per_row - 2 * halo_rows;
-    rows = rows / kChunkRows * kChunkRows;
-    if (rows < kChunkRows)
+    const auto streamed_bytes = [&](int rows) {
+        return marks + (input_row + needs.source_row_bytes) * (rows + 2 * needs.halo_rows) +
+               pass_two_bytes(shape, needs, rows, false);
+    };
+    if (streamed_bytes(smallest_band) > max_memory_bytes)
         throw usage_error(fmt::format("--max-memory leaves {} MiB for the shot's data, too little for {} frames of "
                                       "width {}: a band of {} rows needs {} MiB",
-                                      max_memory_bytes >> 20, shape.frames, shape.width, kChunkRows,
-                                      mebibytes_rounded_up(per_row * (kChunkRows + 2 * halo_rows) + marks)));
-    plan.band_rows = static_cast<int>(std::min<std::int64_t>(rows, shape.height));
-    plan.estimated_bytes = marks + per_row * (plan.band_rows + 2 * halo_rows);
+                                      max_memory_bytes >> 20, shape.frames, shape.width, smallest_band,
+                                      mebibytes_rounded_up(streamed_bytes(smallest_band))));
+    plan.band_rows = largest_band(shape.height, [&](int rows) { return streamed_bytes(rows) <= max_memory_bytes; });
+    plan.estimated_bytes = streamed_bytes(plan.band_rows);
     return plan;
 }
 

@@ -21,6 +21,16 @@ inline constexpr int kChunkRows = 16;
 /// halo's recomputed rows are already a small share at this height).
 inline constexpr int kMaxKeptBandRows = 128;
 
+/// What pass 2 holds for a band besides its input, counted in images of one
+/// float per sample (width × channels per image row).
+struct PassNeeds {
+    int halo_rows = 0;        ///< rows read above and below a band (the widest spatial reach)
+    int sigma_halo_rows = 0;  ///< of those, the rows sigma's residual needs rebuilt for every frame
+    int halo_images = 0;      ///< images over the band with its halo (coefficients, the filter's guide)
+    int band_images = 0;      ///< images over the band's own rows (filtered modes, gains, workers' scratch)
+    std::int64_t source_row_bytes = 0;  ///< what the source keeps per row of a streamed band
+};
+
 /// The chosen way through a shot.
 struct BandPlan {
     bool in_memory = false;  ///< whole shot kept after one read
@@ -30,21 +40,16 @@ struct BandPlan {
     std::int64_t budget_bytes = 0;     ///< the budget it was made for
 };
 
-/// Plans for `max_memory_bytes` of working memory. `halo_rows` is what pass 2
-/// needs around a band (spatial pooling of sigma); `modes` counts the extra
-/// per-sample images pass 2 keeps besides the per-frame ones (coefficients,
-/// filter scratch), `source_row_bytes` what the source keeps per row of a
-/// streamed band (FrameSource::band_bytes_per_row). Throws modestack::Error
+/// Plans for `max_memory_bytes` of working memory. Throws modestack::Error
 /// (usage) when even a minimal band does not fit.
-BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, int halo_rows, int modes,
-                    std::int64_t source_row_bytes = 0);
+BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, const PassNeeds& needs);
 
 /// Bytes of one image row of the input of every frame (a read band or the kept shot).
 std::int64_t input_bytes_per_row(const ShotShape& shape);
-/// Bytes of pass 2's buffers per image row of a band: rebuilt and sigma for every
-/// frame, a third per-frame share for sigma's noise-power scratch (which holds 16
-/// frames at a time: the share leaves room for the rest of pass 2's scratch), plus
-/// `modes` per-sample images.
-std::int64_t work_bytes_per_row(const ShotShape& shape, int modes);
+/// Bytes pass 2 holds for a band of `band_rows` rows, its input aside: the
+/// unfiltered rebuild of every frame over the band and sigma's halo, sigma's
+/// scratch, the images of `needs` and, when `sigma_apart`, each frame's sigma of
+/// the band's rows (a streamed band keeps sigma in its own input rows instead).
+std::int64_t pass_two_bytes(const ShotShape& shape, const PassNeeds& needs, int band_rows, bool sigma_apart);
 
 }  // namespace modestack::denoise

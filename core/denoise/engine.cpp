@@ -28,6 +28,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
+// Per-sample images the mode filter's guide holds over a band with its halo (the
+// guide, its noise and their smoothed copies: mode_filter.cpp).
+constexpr int kGuideImages = 6;
+
 // Rows [row_begin, row_end) of every frame: sample i of frame t is data[t * stride + i].
 // Either read from the source into `storage`, or a window into the kept shot.
 struct Band {
@@ -56,7 +60,10 @@ public:
         m_report.shape = m_shape;
         // Sigma's window reads radius + 1 rows around a pixel (see confidence.h); the
         // mode filter reads its kernel and guide around a pixel.
-        int halo_rows = m_settings.sigma_radius + 1, plan_modes = largest_rank;
+        PassNeeds needs;
+        needs.halo_rows = needs.sigma_halo_rows = sigma_halo_rows();
+        needs.halo_images = largest_rank;  // the projected coefficients
+        needs.source_row_bytes = m_source.band_bytes_per_row();
         m_filter_options = m_settings.mode_filter;
         if (m_settings.mode_filter.enabled) {
             if (!m_settings.feature_guide.kinds.empty() && !in_stage(Stage::Statistics) && !in_stage(Stage::Solve)) {
@@ -64,15 +71,18 @@ public:
                 m_filter_options.feature_channels = m_features->channels();
                 m_report.feature_guide = m_features->summary();
             }
-            halo_rows = std::max(halo_rows, mode_filter_halo(m_filter_options));
-            // Surveyed and filtered coefficients, one frame's kept noise per worker,
-            // the guide with its noise (a few images) and the feature rows.
-            plan_modes += std::max(m_settings.mode_filter.max_modes, largest_rank) +
-                          tbb::this_task_arena::max_concurrency() + 6 +
-                          (m_filter_options.feature_channels + m_shape.channels - 1) / m_shape.channels;
+            needs.halo_rows = std::max(needs.halo_rows, mode_filter_halo(m_filter_options));
+            // The surveyed coefficients, the guide with its noise (a few images) and
+            // the feature rows over the halo; the filtered coefficients, their gains
+            // and one frame's kept noise per worker over the band.
+            const int surveyed = std::max(m_settings.mode_filter.max_modes, largest_rank);
+            needs.halo_images = surveyed + kGuideImages +
+                                (m_filter_options.feature_channels + m_shape.channels - 1) / m_shape.channels;
+            needs.band_images = 2 * surveyed + tbb::this_task_arena::max_concurrency();
         }
-        m_report.plan =
-            plan_bands(m_shape, m_settings.max_memory_bytes, halo_rows, plan_modes, m_source.band_bytes_per_row());
+        // Each worker's residual rows (double) of sigma's windows.
+        needs.band_images += 4 * tbb::this_task_arena::max_concurrency();
+        m_report.plan = plan_bands(m_shape, m_settings.max_memory_bytes, needs);
         Solver solver = m_settings.solver;
         if (solver == Solver::Auto)
             solver = m_shape.frames >= m_settings.randomized_from_frames && m_settings.training_frames.empty() &&
@@ -437,6 +447,9 @@ private:
         }
     }
 
+    // Rows around a band's own that sigma's windows read (see confidence.h).
+    int sigma_halo_rows() const { return m_settings.sigma_radius + 1; }
+
     // Pass 2 reads (or, for a kept shot, points at) rows [row, end) of every frame
     // with the plan's halo rows around them.
     Band& band_with_halo(Band& band, int row, int end)
@@ -617,12 +630,15 @@ private:
 
     // Pass 2 up to the frames, for rows [row, end) of `data` (a band with its halo):
     // the coefficients (valid rows filtered and shrunk, halo rows as projected), the
-    // unfiltered rebuild of the whole band (sigma's residual), s² and the kept-noise
-    // gains of the valid rows. `residual` (optional; valid rows × N modes) receives
-    // the valid rows' unfiltered coefficient images before the filter changes them;
-    // `means` (optional; valid rows × F) each frame's windowed residual mean for sigma.
+    // unfiltered rebuild of the rows sigma's windows read (m_rebuilt), s² and the
+    // kept-noise gains of the valid rows. `residual` (optional; valid rows × N modes)
+    // receives the valid rows' unfiltered coefficient images before the filter
+    // changes them; `means` (optional; frame t's valid rows at means + t · means_stride)
+    // each frame's windowed residual mean for sigma. `means` may be the valid rows
+    // of `data` itself (a streamed band): nothing reads them afterwards.
     void prepare_band(const Band& data, int row, int end, const RebuildBasis& modes,
-                      const lowrank::MutableBandView* residual, std::vector<float>* ranks, float* means = nullptr)
+                      const lowrank::MutableBandView* residual, std::vector<float>* ranks, float* means = nullptr,
+                      std::int64_t means_stride = 0)
     {
         const int frames = m_shape.frames;
         const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
@@ -631,21 +647,32 @@ private:
         m_coefficients.resize(static_cast<size_t>(data.rows) * modes.projected);  // every value written below
         lowrank::MutableBandView coefficient_view{m_coefficients.data(), data.rows, modes.projected, data.rows};
         lowrank::project_coefficients(noisy, modes.temporal_projected, coefficient_view);
-        m_rebuilt.resize(static_cast<size_t>(data.rows) * frames);
-        lowrank::rebuild_from_coefficients({m_coefficients.data(), data.rows, modes.rank, data.rows},
-                                           modes.temporal_rank, {m_rebuilt.data(), data.rows, frames, data.rows});
         if (residual) {
             for (int j = 0; j < modes.rank; ++j)
                 std::copy_n(m_coefficients.begin() + j * data.rows + offset, valid,
                             residual->data + j * residual->frame_stride);
         }
-        lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
-        m_noise_variance.resize(static_cast<size_t>(valid));
-        lowrank::residual_noise_variance(noisy, {m_rebuilt.data(), data.rows, frames, data.rows}, shape, modes.rank,
-                                         row - data.row_begin, end - data.row_begin, m_confidence,
-                                         m_noise_variance.data(), means);
+        // Sigma's windows read sigma_halo_rows() rows around the valid ones: only
+        // those are rebuilt unfiltered (the mode filter's wider halo needs coefficients only).
+        m_residual_begin = std::max(data.row_begin, row - sigma_halo_rows());
+        m_residual_end = std::min(data.row_end, end + sigma_halo_rows());
+        const int residual_begin = m_residual_begin, residual_end = m_residual_end;
+        const std::int64_t residual_first = (residual_begin - data.row_begin) * row_samples;
+        m_rebuilt_stride = (residual_end - residual_begin) * row_samples;
+        m_rebuilt_offset = (row - residual_begin) * row_samples;
+        m_rebuilt.resize(static_cast<size_t>(m_rebuilt_stride) * frames);
+        lowrank::rebuild_from_coefficients(
+            {m_coefficients.data() + residual_first, m_rebuilt_stride, modes.rank, data.rows}, modes.temporal_rank,
+            {m_rebuilt.data(), m_rebuilt_stride, frames, m_rebuilt_stride});
+        // The filter reads the noisy band, which the means may overwrite: it goes first.
         if (m_settings.mode_filter.enabled)
             filter_band(m_coefficients, data, modes.rebuild_modes, row, end, m_gains, ranks);
+        lowrank::ImageBandShape shape{m_shape.width, residual_end - residual_begin, m_shape.channels};
+        m_noise_variance.resize(static_cast<size_t>(valid));
+        lowrank::residual_noise_variance({noisy.data + residual_first, m_rebuilt_stride, frames, noisy.frame_stride},
+                                         {m_rebuilt.data(), m_rebuilt_stride, frames, m_rebuilt_stride}, shape,
+                                         modes.rank, row - residual_begin, end - residual_begin, m_confidence,
+                                         m_noise_variance.data(), means, means_stride);
         for (size_t j = 0; j < m_report.shrinkage.size(); ++j)  // --shrink optimal, the band's own rows
             for (std::int64_t i = 0; i < valid; ++i)
                 m_coefficients[j * data.rows + offset + i] *= static_cast<float>(m_report.shrinkage[j]);
@@ -693,7 +720,7 @@ private:
         Band band;
         // Reused from band to band: fresh buffers of this size cost the kernel's page
         // zeroing every band (7.5 % of a 1080p run's time).
-        ScratchBuffer<float> sigma;  // frame_sigma writes every value
+        ScratchBuffer<float> kept_sigma;  // sigma_from_mean writes every value
         std::vector<float> ranks;
         for (int row = 0; row < m_shape.height; row += plan.band_rows) {
             int end = std::min(m_shape.height, row + plan.band_rows);
@@ -701,10 +728,20 @@ private:
             throw_if_cancelled();
             const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
             // Sigma of the band's own rows: prepare_band leaves each frame's windowed
-            // residual mean in it (the pass that finds s²), finished frame by frame.
-            sigma.resize(static_cast<size_t>(valid) * frames);
-            prepare_band(data, row, end, modes, nullptr, rank_map ? &ranks : nullptr, sigma.data());
-            lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
+            // residual mean there (the pass that finds s²), finished frame by frame.
+            // A streamed band's own input rows hold it (nothing reads them after
+            // prepare_band); a kept shot's must stay, so sigma gets its own buffer.
+            float* sigma = nullptr;
+            std::int64_t sigma_stride = valid;
+            if (kept) {
+                kept_sigma.resize(static_cast<size_t>(valid) * frames);
+                sigma = kept_sigma.data();
+            } else {
+                sigma = band.storage.data() + offset;
+                sigma_stride = data.stride;
+            }
+            prepare_band(data, row, end, modes, nullptr, rank_map ? &ranks : nullptr, sigma, sigma_stride);
+            const lowrank::ImageBandShape shape{m_shape.width, m_residual_end - m_residual_begin, m_shape.channels};
             tbb::parallel_for(0, frames, [&](int t) {
                 std::vector<float>& kept_noise = m_kept_noise.local();  // nothing below runs in parallel
                 if (filter) {
@@ -712,11 +749,11 @@ private:
                     kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes, m_gains.data(), valid,
                                         kept_noise.data());
                 }
-                lowrank::sigma_from_mean(shape, row - data.row_begin, end - data.row_begin, m_confidence,
+                lowrank::sigma_from_mean(shape, row - m_residual_begin, end - m_residual_begin, m_confidence,
                                          m_noise_variance.data(), modes.leverages(t),
-                                         filter ? kept_noise.data() : nullptr, sigma.data() + t * valid);
+                                         filter ? kept_noise.data() : nullptr, sigma + t * sigma_stride);
             });
-            lowrank::MutableBandView output_view{m_rebuilt.data() + offset, valid, frames, data.rows};
+            lowrank::MutableBandView output_view{m_rebuilt.data() + m_rebuilt_offset, valid, frames, m_rebuilt_stride};
             if (output > 0)  // the band's own rows from the changed coefficients
                 lowrank::rebuild_from_coefficients({m_coefficients.data() + offset, valid, output, data.rows},
                                                    modes.temporal.leftCols(output), output_view);
@@ -724,8 +761,8 @@ private:
                 make_non_negative(output_view, m_settings.non_negative, m_settings.non_negative_floor);
 
             tbb::parallel_for(0, frames, [&](int frame) {
-                m_sink.write_rows(frame, row, end, m_rebuilt.data() + frame * data.rows + offset,
-                                  sigma.data() + frame * valid);
+                m_sink.write_rows(frame, row, end, output_view.data + frame * output_view.frame_stride,
+                                  sigma + frame * sigma_stride);
             });
             if (m_sink.wants_modes())
                 write_modes(m_coefficients, data, basis, rank, row, end, offset);
@@ -878,6 +915,9 @@ private:
     // prepare_band's results for the current band, reused from band to band:
     ScratchBuffer<float> m_coefficients;  // [mode][sample] of the band with its halo
     ScratchBuffer<float> m_rebuilt;       // [frame][sample]: the unfiltered rebuild, then the output rows
+    int m_residual_begin = 0, m_residual_end = 0;  // the image rows m_rebuilt holds (the band's and sigma's halo)
+    std::int64_t m_rebuilt_stride = 0;             // samples per frame in m_rebuilt
+    std::int64_t m_rebuilt_offset = 0;             // where the band's own rows start in a frame of m_rebuilt
     std::vector<float> m_noise_variance;  // sigma's s² of the valid rows
     std::vector<float> m_gains;           // the mode filter's kept-noise gain per valid pixel and mode
     lowrank::ConfidenceOptions m_confidence;

@@ -140,6 +140,7 @@ public:
         window_sum.resize(static_cast<std::size_t>(m_row_length));
         const Rows residual{residual_buffer.data(), m_residual_first, m_row_length};
         const std::int64_t first = m_residual_first * m_row_length;
+        // The frame's noisy values are not read after this copy: `mean` may be their storage.
         for (std::size_t j = 0; j < residual_buffer.size(); ++j)
             residual_buffer[j] = static_cast<double>(noisy_frame[first + j]) - rebuilt_frame[first + j];
         if (mean)
@@ -189,7 +190,7 @@ double window_size(const ImageBandShape& shape, int radius, int x, int y)
 
 void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape, int rank,
                              int valid_y0, int valid_y1, const ConfidenceOptions& options, float* noise_variance,
-                             float* means)
+                             float* means, std::int64_t means_stride)
 {
     check_band(noisy, rebuilt, shape, valid_y0, valid_y1, options.radius);
     const int frames = noisy.frames;
@@ -198,6 +199,8 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
     const std::int64_t samples = static_cast<std::int64_t>(shape.width) * shape.channels * (valid_y1 - valid_y0);
     if (samples == 0)
         return;
+    if (means_stride == 0)
+        means_stride = samples;
     throw_if_cancelled();
     // Per frame, the windowed high-pass power, a group of frames at a time so that
     // the scratch does not grow with F; s² sums it over frames in frame order. The
@@ -219,7 +222,7 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
             ResidualWindows windows(shape, options.radius, valid_y0, valid_y1);
             for (int t = range.begin(); t != range.end(); ++t)
                 windows.compute(noisy.data + t * noisy.frame_stride, rebuilt.data + t * rebuilt.frame_stride,
-                                means ? means + t * samples : nullptr, noise_power.data() + (t - group) * samples);
+                                means ? means + t * means_stride : nullptr, noise_power.data() + (t - group) * samples);
         });
         for_each_tile(samples, [&](std::int64_t row0, std::int64_t count) {
             for (int t = group; t < group_end; ++t) {

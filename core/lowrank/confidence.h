@@ -66,12 +66,15 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
 /// some rows (modes task) or some frames of all rows (write task), giving the same
 /// bits as one call: s² of output rows [valid_y0, valid_y1) from every frame of
 /// the band (float per sample, laid out like one frame of `sigma`) ...
-/// With `means` (optional, laid out like `sigma`) it also leaves there each
-/// frame's windowed residual mean, the first half of frame_sigma's work, so that
-/// a whole run reads every residual once and finishes with sigma_from_mean ...
+/// With `means` (optional; frame t's output rows at means + t · means_stride, 0
+/// meaning laid out like `sigma`) it also leaves there each frame's windowed
+/// residual mean, the first half of frame_sigma's work, so that a whole run reads
+/// every residual once and finishes with sigma_from_mean. `means` may be the
+/// output rows of `noisy` itself: a frame's noisy values are all read before its
+/// mean is written (a streamed band needs no other buffer for sigma) ...
 void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape, int rank,
                              int valid_y0, int valid_y1, const ConfidenceOptions& options, float* noise_variance,
-                             float* means = nullptr);
+                             float* means = nullptr, std::int64_t means_stride = 0);
 
 /// ... and sigma of one frame from its noisy and rebuilt values (whole band in
 /// `shape`), s² and the frame's leverage h_t, or its kept noise per sample

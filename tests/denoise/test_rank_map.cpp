@@ -153,8 +153,8 @@ TEST_CASE("rank map: streamed, kept, 1 and 2 threads give the same bits")
     const int height = 160;  // tall enough to stream in bands
     const MemoryShot shot = shot_of(0.3, 5, height);
     Result kept = run(shot, true, 2);
-    Result streamed = run(shot, true, 2, 5'600'000);
-    Result single = run(shot, true, 2, 5'600'000, 1);
+    Result streamed = run(shot, true, 2, 4'500'000);
+    Result single = run(shot, true, 2, 4'500'000, 1);
     CHECK(kept.report.plan.in_memory);
     CHECK_FALSE(streamed.report.plan.in_memory);
     CHECK(streamed.report.plan.band_rows < height);
