@@ -22,7 +22,7 @@ std::int64_t parse_memory_budget(const std::string& text, const std::string& opt
 /// budget is the whole process's: minus what the process holds already (the
 /// program and its libraries, about 130 MiB with Debian's OpenImageIO, and the
 /// opened inputs) and what OpenEXR will hold per open file while reading and
-/// writing (about one chunk of scanlines), for every input and `outputs` outputs
+/// writing (three chunks of scanlines), for every input and `outputs` outputs
 /// with `extra_channels` more channels. Throws a usage error naming --max-memory when nothing is left.
 std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::SequenceReader& reader, int outputs,
                                   int extra_channels);

@@ -217,4 +217,10 @@ std::size_t SequenceReader::native_pixel_bytes(int frame_index) const
     return m_frames.at(frame_index)->native_pixel_bytes;
 }
 
+std::size_t SequenceReader::selected_value_bytes(int frame_index) const
+{
+    const detail::OpenFrame& frame = *m_frames.at(frame_index);
+    return frame.spec.channelformat(frame.selected.front()).size();
+}
+
 }  // namespace modestack::io
