@@ -439,11 +439,20 @@ int run_denoise(const DenoiseOptions& options)
         return 0;
     }
 
-    // --max-memory bounds the whole process: the engine gets what the program and open files leave.
-    const std::int64_t max_memory_bytes = settings.max_memory_bytes;
-    settings.max_memory_bytes =
-        engine_memory_budget(settings.max_memory_bytes, reader, frames_written, reader.selected_channel_count());
     SequenceSource source(reader);
+    // --max-memory bounds the whole process: the engine gets what the program and
+    // open files leave. The mode filter's guide layers are opened now so that
+    // what they hold is counted too.
+    GuideFiles guides;
+    if (settings.mode_filter.enabled) {
+        for (denoise::Auxiliary kind : settings.feature_guide.kinds)
+            if (const io::SequenceReader* guide = source.auxiliary_reader(kind))
+                guides.readers.push_back(guide);
+        guides.frames = settings.feature_guide.frames;
+    }
+    const std::int64_t max_memory_bytes = settings.max_memory_bytes;
+    settings.max_memory_bytes = engine_memory_budget(settings.max_memory_bytes, reader, frames_written,
+                                                     reader.selected_channel_count(), guides);
     SequenceSink sink(reader, paths, options.save_modes);
     sink.reuse_rows_of(source);
     sink.write_rank_map_to(options.rank_map);

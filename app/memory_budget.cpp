@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <functional>
 #include <fstream>
 #include <malloc.h>
 #include <unistd.h>
@@ -49,7 +50,7 @@ std::int64_t open_file_bytes(int width, std::size_t pixel_bytes, int chunk_rows)
 }  // namespace
 
 std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::SequenceReader& reader, int outputs,
-                                  int extra_channels)
+                                  int extra_channels, const GuideFiles& guides)
 {
     std::int64_t files = 0;
     for (int frame = 0; frame < reader.frame_count(); ++frame) {
@@ -57,15 +58,28 @@ std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::Seque
         const int rows = reader.chunk_rows(frame);
         files += open_file_bytes(reader.width(), pixel, rows);
         if (frame < outputs)  // outputs add sigma channels in the first selected channel's type
-            files += open_file_bytes(reader.width(),
-                                     pixel + reader.selected_value_bytes(frame) * static_cast<std::size_t>(extra_channels),
-                                     rows);
+            files += open_file_bytes(
+                reader.width(), pixel + reader.selected_value_bytes(frame) * static_cast<std::size_t>(extra_channels),
+                rows);
+    }
+    int open_files = reader.frame_count() + outputs;
+    for (const io::SequenceReader* guide : guides.readers) {
+        // The guide reads a few frames spread over the shot: count the largest files.
+        std::vector<std::int64_t> sizes;
+        for (int frame = 0; frame < guide->frame_count(); ++frame)
+            sizes.push_back(
+                open_file_bytes(guide->width(), guide->native_pixel_bytes(frame), guide->chunk_rows(frame)));
+        const int read = std::min(guides.frames, guide->frame_count());
+        std::partial_sort(sizes.begin(), sizes.begin() + read, sizes.end(), std::greater<>());
+        for (int i = 0; i < read; ++i)
+            files += sizes[static_cast<std::size_t>(i)];
+        open_files += guide->frame_count();
     }
     const std::int64_t held = resident_bytes() + files;
     if (held >= max_memory_bytes)
         throw usage_error(fmt::format("--max-memory {} MiB is too small: the program and its {} open files alone "
                                       "hold about {} MiB",
-                                      max_memory_bytes >> 20, reader.frame_count() + outputs, (held >> 20) + 1));
+                                      max_memory_bytes >> 20, open_files, (held >> 20) + 1));
     return max_memory_bytes - held;
 }
 

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace modestack::app {
 
@@ -18,14 +19,22 @@ std::int64_t automatic_memory_budget();
 /// "auto" → automatic_memory_budget(); otherwise parse_memory_size(text, option).
 std::int64_t parse_memory_budget(const std::string& text, const std::string& option);
 
+/// What OpenEXR holds for the feature guide's layers (opened again as their own
+/// sequences): the files of the `frames` frames whose rows it reads.
+struct GuideFiles {
+    std::vector<const io::SequenceReader*> readers;
+    int frames = 0;
+};
+
 /// The part of `max_memory_bytes` left for the denoise engine's plan, when the
 /// budget is the whole process's: minus what the process holds already (the
-/// program and its libraries, about 130 MiB with Debian's OpenImageIO, and the
-/// opened inputs) and what OpenEXR will hold per open file while reading and
-/// writing (three chunks of scanlines), for every input and `outputs` outputs
-/// with `extra_channels` more channels. Throws a usage error naming --max-memory when nothing is left.
+/// program and its libraries, about 130 MiB with Debian's OpenImageIO, the
+/// opened inputs and guide layers) and what OpenEXR will hold per open file
+/// while reading and writing (three chunks of scanlines), for every input,
+/// `outputs` outputs with `extra_channels` more channels and the guide files
+/// read. Throws a usage error naming --max-memory when nothing is left.
 std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::SequenceReader& reader, int outputs,
-                                  int extra_channels);
+                                  int extra_channels, const GuideFiles& guides = {});
 
 /// Tells the C library to keep freed blocks of up to 32 MiB (glibc's largest
 /// mmap threshold) in its heap for reuse instead of returning them to the kernel:

@@ -111,6 +111,11 @@ int SequenceSource::auxiliary_channels(denoise::Auxiliary kind) const { return a
 
 std::string SequenceSource::auxiliary_layer(denoise::Auxiliary kind) const { return auxiliary(kind).layer; }
 
+const io::SequenceReader* SequenceSource::auxiliary_reader(denoise::Auxiliary kind) const
+{
+    return auxiliary(kind).reader.get();
+}
+
 void SequenceSource::read_auxiliary_rows(denoise::Auxiliary kind, int frame_index, int row_begin, int row_end,
                                          float* destination)
 {

@@ -39,6 +39,10 @@ public:
                              float* destination) override;
     /// The layer found for `kind` ("" = none).
     std::string auxiliary_layer(denoise::Auxiliary kind) const;
+    /// The sequence opened for `kind`'s layer (opening it now), or nullptr when
+    /// the input has none (valid until release_auxiliary): for the memory
+    /// budget, which counts its open files.
+    const io::SequenceReader* auxiliary_reader(denoise::Auxiliary kind) const;
     /// Closes the files opened for `kind` (after a pre-pass that was their only use).
     void release_auxiliary(denoise::Auxiliary kind);
 

@@ -79,7 +79,8 @@ TEST_CASE("band plan: streamed bands are the largest that fit and grow with the 
             const BandPlan smaller = plan_bands(kShape, plan.estimated_bytes, filter_needs());
             CHECK(smaller.band_rows == plan.band_rows);
             CHECK(smaller.estimated_bytes == plan.estimated_bytes);
-            const std::int64_t grown_pass_two = pass_two_bytes(kShape, filter_needs(), plan.band_rows + kChunkRows, false);
+            const std::int64_t grown_pass_two =
+                pass_two_bytes(kShape, filter_needs(), plan.band_rows + kChunkRows, false);
             CHECK(grown_pass_two > pass_two_bytes(kShape, filter_needs(), plan.band_rows, false));
             const BandPlan tighter = plan_bands(kShape, plan.estimated_bytes - 1, filter_needs());
             CHECK(tighter.band_rows < plan.band_rows);
