@@ -21,6 +21,7 @@
 #include <cstring>
 #include <mutex>
 #include <optional>
+#include <utility>
 
 namespace modestack::denoise {
 namespace {
@@ -450,6 +451,13 @@ private:
     // Rows around a band's own that sigma's windows read (see confidence.h).
     int sigma_halo_rows() const { return m_settings.sigma_radius + 1; }
 
+    // The image rows [begin, end) of `data` that sigma's windows read for rows
+    // [row, end): prepare_band rebuilds those unfiltered into m_rebuilt.
+    std::pair<int, int> sigma_rows(const Band& data, int row, int end) const
+    {
+        return {std::max(data.row_begin, row - sigma_halo_rows()), std::min(data.row_end, end + sigma_halo_rows())};
+    }
+
     // Pass 2 reads (or, for a kept shot, points at) rows [row, end) of every frame
     // with the plan's halo rows around them.
     Band& band_with_halo(Band& band, int row, int end)
@@ -652,25 +660,22 @@ private:
                 std::copy_n(m_coefficients.begin() + j * data.rows + offset, valid,
                             residual->data + j * residual->frame_stride);
         }
-        // Sigma's windows read sigma_halo_rows() rows around the valid ones: only
-        // those are rebuilt unfiltered (the mode filter's wider halo needs coefficients only).
-        m_residual_begin = std::max(data.row_begin, row - sigma_halo_rows());
-        m_residual_end = std::min(data.row_end, end + sigma_halo_rows());
-        const int residual_begin = m_residual_begin, residual_end = m_residual_end;
+        // Only the rows sigma's windows read are rebuilt unfiltered (the mode
+        // filter's wider halo needs coefficients only).
+        const auto [residual_begin, residual_end] = sigma_rows(data, row, end);
         const std::int64_t residual_first = (residual_begin - data.row_begin) * row_samples;
-        m_rebuilt_stride = (residual_end - residual_begin) * row_samples;
-        m_rebuilt_offset = (row - residual_begin) * row_samples;
-        m_rebuilt.resize(static_cast<size_t>(m_rebuilt_stride) * frames);
+        const std::int64_t rebuilt_stride = (residual_end - residual_begin) * row_samples;
+        m_rebuilt.resize(static_cast<size_t>(rebuilt_stride) * frames);
         lowrank::rebuild_from_coefficients(
-            {m_coefficients.data() + residual_first, m_rebuilt_stride, modes.rank, data.rows}, modes.temporal_rank,
-            {m_rebuilt.data(), m_rebuilt_stride, frames, m_rebuilt_stride});
+            {m_coefficients.data() + residual_first, rebuilt_stride, modes.rank, data.rows}, modes.temporal_rank,
+            {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride});
         // The filter reads the noisy band, which the means may overwrite: it goes first.
         if (m_settings.mode_filter.enabled)
             filter_band(m_coefficients, data, modes.rebuild_modes, row, end, m_gains, ranks);
         lowrank::ImageBandShape shape{m_shape.width, residual_end - residual_begin, m_shape.channels};
         m_noise_variance.resize(static_cast<size_t>(valid));
-        lowrank::residual_noise_variance({noisy.data + residual_first, m_rebuilt_stride, frames, noisy.frame_stride},
-                                         {m_rebuilt.data(), m_rebuilt_stride, frames, m_rebuilt_stride}, shape,
+        lowrank::residual_noise_variance({noisy.data + residual_first, rebuilt_stride, frames, noisy.frame_stride},
+                                         {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride}, shape,
                                          modes.rank, row - residual_begin, end - residual_begin, m_confidence,
                                          m_noise_variance.data(), means, means_stride);
         for (size_t j = 0; j < m_report.shrinkage.size(); ++j)  // --shrink optimal, the band's own rows
@@ -741,7 +746,11 @@ private:
                 sigma_stride = data.stride;
             }
             prepare_band(data, row, end, modes, nullptr, rank_map ? &ranks : nullptr, sigma, sigma_stride);
-            const lowrank::ImageBandShape shape{m_shape.width, m_residual_end - m_residual_begin, m_shape.channels};
+            // m_rebuilt holds the unfiltered rebuild of sigma's rows; the output goes over its valid ones.
+            const std::pair<int, int> residual_rows = sigma_rows(data, row, end);
+            const int residual_begin = residual_rows.first, residual_end = residual_rows.second;
+            const std::int64_t rebuilt_stride = (residual_end - residual_begin) * row_samples;
+            const lowrank::ImageBandShape shape{m_shape.width, residual_end - residual_begin, m_shape.channels};
             tbb::parallel_for(0, frames, [&](int t) {
                 std::vector<float>& kept_noise = m_kept_noise.local();  // nothing below runs in parallel
                 if (filter) {
@@ -749,11 +758,12 @@ private:
                     kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes, m_gains.data(), valid,
                                         kept_noise.data());
                 }
-                lowrank::sigma_from_mean(shape, row - m_residual_begin, end - m_residual_begin, m_confidence,
+                lowrank::sigma_from_mean(shape, row - residual_begin, end - residual_begin, m_confidence,
                                          m_noise_variance.data(), modes.leverages(t),
                                          filter ? kept_noise.data() : nullptr, sigma + t * sigma_stride);
             });
-            lowrank::MutableBandView output_view{m_rebuilt.data() + m_rebuilt_offset, valid, frames, m_rebuilt_stride};
+            lowrank::MutableBandView output_view{m_rebuilt.data() + (row - residual_begin) * row_samples, valid,
+                                                 frames, rebuilt_stride};
             if (output > 0)  // the band's own rows from the changed coefficients
                 lowrank::rebuild_from_coefficients({m_coefficients.data() + offset, valid, output, data.rows},
                                                    modes.temporal.leftCols(output), output_view);
@@ -914,10 +924,7 @@ private:
     std::vector<float> m_filtered;  // filter_band's output, reused from band to band
     // prepare_band's results for the current band, reused from band to band:
     ScratchBuffer<float> m_coefficients;  // [mode][sample] of the band with its halo
-    ScratchBuffer<float> m_rebuilt;       // [frame][sample]: the unfiltered rebuild, then the output rows
-    int m_residual_begin = 0, m_residual_end = 0;  // the image rows m_rebuilt holds (the band's and sigma's halo)
-    std::int64_t m_rebuilt_stride = 0;             // samples per frame in m_rebuilt
-    std::int64_t m_rebuilt_offset = 0;             // where the band's own rows start in a frame of m_rebuilt
+    ScratchBuffer<float> m_rebuilt;       // [frame][sample] of sigma_rows(): the unfiltered rebuild, then the output rows
     std::vector<float> m_noise_variance;  // sigma's s² of the valid rows
     std::vector<float> m_gains;           // the mode filter's kept-noise gain per valid pixel and mode
     lowrank::ConfidenceOptions m_confidence;
