@@ -2,6 +2,7 @@
 
 #include "core/common/error.h"
 #include "io/detail/open_frame.h"
+#include "io/detail/zip_scanline_writer.h"
 #include "io/half_conversion.h"
 #include "io/sequence_reader.h"
 #include "io/temporary_file.h"
@@ -82,7 +83,8 @@ struct ValuePlace {
 };
 
 struct FrameOutput::State {
-    std::unique_ptr<OIIO::ImageOutput> output;
+    std::unique_ptr<detail::ZipScanlineWriter> zip_writer;  ///< a ZIP/ZIPS copy, written with libdeflate
+    std::unique_ptr<OIIO::ImageOutput> output;              ///< every other output
     OIIO::ImageSpec spec;
     const detail::OpenFrame* source = nullptr;  ///< the copied input frame, if any
     std::vector<OIIO::TypeDesc> extra_types;
@@ -124,7 +126,13 @@ FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, 
     for (const auto* places : {&m_state->replaced_places, &m_state->extra_places})
         for (const ValuePlace& place : *places)
             m_state->all_places_half = m_state->all_places_half && place.type == OIIO::TypeDesc::HALF;
-    open(&spec);
+    remove_stale_temporaries(m_path);
+    m_temporary_path = temporary_path_for(m_path);
+    m_state->spec = spec;
+    m_state->zip_writer =
+        detail::ZipScanlineWriter::open(m_temporary_path, m_path, source, extra_channels, attributes);
+    if (!m_state->zip_writer)
+        open(&spec);
 }
 
 FrameOutput::FrameOutput(const std::string& path, const NewImageDescription& image,
@@ -152,8 +160,10 @@ void FrameOutput::open(const void* spec_pointer)
 {
     const OIIO::ImageSpec& spec = *static_cast<const OIIO::ImageSpec*>(spec_pointer);
     m_state->spec = spec;
-    remove_stale_temporaries(m_path);
-    m_temporary_path = temporary_path_for(m_path);
+    if (m_temporary_path.empty()) {
+        remove_stale_temporaries(m_path);
+        m_temporary_path = temporary_path_for(m_path);
+    }
     m_state->output = OIIO::ImageOutput::create("openexr");
     if (!m_state->output)
         throw internal_error("OpenImageIO has no OpenEXR writer");
@@ -168,6 +178,8 @@ FrameOutput::~FrameOutput()
         return;
     if (m_state && m_state->output)
         m_state->output->close();
+    if (m_state)
+        m_state->zip_writer.reset();  // closes the file before it is removed
     std::error_code ignored;
     if (!m_temporary_path.empty())
         stdfs::remove(m_temporary_path, ignored);
@@ -216,6 +228,10 @@ void FrameOutput::write_replaced_rows(int row_begin, int row_end, const unsigned
         place_halves(pixels, replaced, extra, out);
     else
         place_values(pixels, replaced, extra, out);
+    if (m_state->zip_writer) {
+        m_state->zip_writer->write_rows(row_begin, row_end, out);
+        return;
+    }
     const OIIO::ImageSpec& spec = m_state->spec;
     errno = 0;  // fail() reports the system's reason, e.g. a full disk
     if (!m_state->output->write_scanlines(spec.y + row_begin, spec.y + row_end, spec.z, OIIO::TypeUnknown, out))
@@ -277,10 +293,15 @@ void FrameOutput::write_float_rows(int row_begin, int row_end, const float* pixe
 
 void FrameOutput::commit()
 {
-    errno = 0;  // fail() reports the system's reason, e.g. a full disk
-    if (!m_state->output->close())
-        fail("cannot finish writing");
-    m_state->output.reset();
+    if (m_state->zip_writer) {
+        m_state->zip_writer->finish();
+        m_state->zip_writer.reset();
+    } else {
+        errno = 0;  // fail() reports the system's reason, e.g. a full disk
+        if (!m_state->output->close())
+            fail("cannot finish writing");
+        m_state->output.reset();
+    }
     std::error_code error;
     stdfs::rename(m_temporary_path, m_path, error);
     if (error)

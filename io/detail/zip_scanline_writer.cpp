@@ -1,0 +1,317 @@
+#include "io/detail/zip_scanline_writer.h"
+
+#include "core/common/error.h"
+#include "io/detail/open_frame.h"
+
+#include <fmt/format.h>
+#include <libdeflate.h>
+#include <openexr.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <utility>
+
+namespace modestack::io::detail {
+namespace {
+
+// The last message OpenEXR's Core reported on this thread (each writer's calls
+// all run on the thread that makes them).
+thread_local std::string t_exr_message;
+
+void remember_message(exr_const_context_t, exr_result_t, const char* message)
+{
+    t_exr_message = message ? message : "";
+}
+
+exr_context_initializer_t context_initializer()
+{
+    exr_context_initializer_t initializer = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    initializer.error_handler_fn = &remember_message;
+    return initializer;
+}
+
+// The reason for a failed call: OpenEXR's message, plus the system's (e.g. a full disk).
+std::string failure_reason(int system_error)
+{
+    std::string reason = t_exr_message;
+    if (system_error != 0)
+        reason = reason.empty() ? std::strerror(system_error) : fmt::format("{}: {}", reason, std::strerror(system_error));
+    return reason;
+}
+
+// The level OpenEXR's C++ library (Imf::Header::zipCompressionLevel) writes ZIP at
+// by default, so outputs compress as the OpenImageIO path would.
+constexpr int kZipLevel = 4;
+
+struct ReadContext {
+    exr_context_t context = nullptr;
+    ~ReadContext()
+    {
+        if (context)
+            exr_finish(&context);
+    }
+};
+
+// ZIP's reversible pre-pass (OpenEXR internal_zip.c): the even bytes then the
+// odd bytes, then each byte as the difference from the one before it.
+void split_and_difference(const unsigned char* raw, size_t count, unsigned char* out)
+{
+    unsigned char* first = out;
+    unsigned char* second = out + (count + 1) / 2;
+    size_t i = 0;
+    for (; i + 1 < count; i += 2) {
+        *first++ = raw[i];
+        *second++ = raw[i + 1];
+    }
+    if (i < count)
+        *first = raw[i];
+    int previous = out[0];
+    for (size_t k = 1; k < count; ++k) {
+        const int value = out[k];
+        out[k] = static_cast<unsigned char>(value - previous + (128 + 256));
+        previous = value;
+    }
+}
+
+// One compressor per thread, not per file: a shot has hundreds of outputs open.
+libdeflate_compressor* thread_compressor()
+{
+    struct Owner {
+        libdeflate_compressor* compressor = libdeflate_alloc_compressor(kZipLevel);
+        ~Owner() { libdeflate_free_compressor(compressor); }
+    };
+    thread_local Owner owner;
+    if (!owner.compressor)
+        throw std::bad_alloc();
+    return owner.compressor;
+}
+
+bool exr_type_of(const OIIO::TypeDesc& type, exr_pixel_type_t& exr_type)
+{
+    if (type == OIIO::TypeDesc::HALF)
+        exr_type = EXR_PIXEL_HALF;
+    else if (type == OIIO::TypeDesc::FLOAT)
+        exr_type = EXR_PIXEL_FLOAT;
+    else if (type == OIIO::TypeDesc::UINT)
+        exr_type = EXR_PIXEL_UINT;
+    else
+        return false;
+    return true;
+}
+
+}  // namespace
+
+struct ZipScanlineWriter::State {
+    std::string reported_path;
+    exr_context_t context = nullptr;
+    int width = 0, height = 0;
+    int first_y = 0;          ///< the data window's first row
+    int lines_per_chunk = 1;  ///< 16 for ZIP, 1 for ZIPS
+    size_t pixel_bytes = 0;   ///< one interleaved input pixel
+    struct Channel {
+        size_t offset = 0;  ///< in an interleaved pixel
+        size_t bytes = 0;
+    };
+    std::vector<Channel> channels;  ///< in the file's (sorted) order
+    size_t row_bytes = 0;           ///< one scanline as stored: channel after channel
+    std::vector<unsigned char> chunk;  ///< the rows of the chunk being filled, as stored
+    int chunk_row = 0;  ///< first row of that chunk
+    int next_row = 0;   ///< the row write_rows expects next
+
+    ~State()
+    {
+        if (context)
+            exr_finish(&context);
+    }
+};
+
+std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& path, const std::string& reported_path,
+                                                           const OpenFrame& source,
+                                                           const std::vector<std::string>& extra_channels,
+                                                           const std::vector<HeaderAttribute>& attributes)
+{
+    if (const char* choice = std::getenv("MODESTACK_EXR_WRITER"); choice && std::strcmp(choice, "openimageio") == 0)
+        return nullptr;
+    const OIIO::ImageSpec& spec = source.spec;
+    if (spec.tile_width != 0 || spec.depth > 1 || source.selected.empty())
+        return nullptr;
+
+    // Only what this writer can copy exactly: one scanline part, ZIP or ZIPS, no subsampling.
+    ReadContext input;
+    exr_context_initializer_t initializer = context_initializer();
+    if (exr_start_read(&input.context, source.file.c_str(), &initializer) != EXR_ERR_SUCCESS)
+        return nullptr;  // the OpenImageIO path reports what is wrong
+    int parts = 0;
+    exr_storage_t storage = EXR_STORAGE_LAST_TYPE;
+    exr_compression_t compression = EXR_COMPRESSION_LAST_TYPE;
+    const exr_attr_chlist_t* input_channels = nullptr;
+    exr_attr_box2i_t data_window{}, display_window{};
+    if (exr_get_count(input.context, &parts) != EXR_ERR_SUCCESS || parts != 1 ||
+        exr_get_storage(input.context, 0, &storage) != EXR_ERR_SUCCESS || storage != EXR_STORAGE_SCANLINE ||
+        exr_get_compression(input.context, 0, &compression) != EXR_ERR_SUCCESS ||
+        (compression != EXR_COMPRESSION_ZIP && compression != EXR_COMPRESSION_ZIPS) ||
+        exr_get_channels(input.context, 0, &input_channels) != EXR_ERR_SUCCESS ||
+        exr_get_data_window(input.context, 0, &data_window) != EXR_ERR_SUCCESS ||
+        exr_get_display_window(input.context, 0, &display_window) != EXR_ERR_SUCCESS)
+        return nullptr;
+
+    // Where each channel sits in an interleaved pixel, by name.
+    std::map<std::string, State::Channel> places;
+    for (int c = 0; c < spec.nchannels; ++c)
+        places[spec.channelnames[c]] = {source.byte_offset[c], spec.channelformat(c).size()};
+    const OIIO::TypeDesc extra_type = spec.channelformat(source.selected.front());
+    exr_pixel_type_t extra_exr_type = EXR_PIXEL_HALF;
+    if (!exr_type_of(extra_type, extra_exr_type))
+        return nullptr;
+    for (size_t k = 0; k < extra_channels.size(); ++k)
+        if (!places.emplace(extra_channels[k], State::Channel{source.native_pixel_bytes + k * extra_type.size(),
+                                                              extra_type.size()})
+                 .second)
+            return nullptr;
+    if (input_channels->num_channels != spec.nchannels)
+        return nullptr;
+    for (int c = 0; c < input_channels->num_channels; ++c) {
+        const exr_attr_chlist_entry_t& channel = input_channels->entries[c];
+        if (channel.x_sampling != 1 || channel.y_sampling != 1 || !places.count(channel.name.str))
+            return nullptr;
+    }
+
+    auto state = std::make_unique<State>();
+    state->reported_path = reported_path;
+    state->width = data_window.max.x - data_window.min.x + 1;
+    state->height = data_window.max.y - data_window.min.y + 1;
+    state->first_y = data_window.min.y;
+    state->lines_per_chunk = compression == EXR_COMPRESSION_ZIP ? 16 : 1;
+    state->pixel_bytes = source.native_pixel_bytes + extra_channels.size() * extra_type.size();
+    if (state->width != spec.width || state->height != spec.height)
+        return nullptr;
+
+    // A header this writer cannot build (an attribute OpenEXR's Core refuses) is
+    // left to OpenImageIO too: the temporary file is removed and nullptr returned.
+    exr_context_t& output = state->context;
+    if (exr_start_write(&output, path.c_str(), EXR_WRITE_FILE_DIRECTLY, &initializer) != EXR_ERR_SUCCESS)
+        return nullptr;
+    int part = 0;
+    // Long attribute and channel names (Cycles writes some) as the input has them.
+    bool ok = exr_set_longname_support(output, 1) == EXR_ERR_SUCCESS &&
+              exr_add_part(output, nullptr, EXR_STORAGE_SCANLINE, &part) == EXR_ERR_SUCCESS;
+    for (int c = 0; ok && c < input_channels->num_channels; ++c) {
+        const exr_attr_chlist_entry_t& channel = input_channels->entries[c];
+        ok = exr_add_channel(output, part, channel.name.str, channel.pixel_type,
+                             static_cast<exr_perceptual_treatment_t>(channel.p_linear), 1, 1) == EXR_ERR_SUCCESS;
+    }
+    for (size_t k = 0; ok && k < extra_channels.size(); ++k)
+        ok = exr_add_channel(output, part, extra_channels[k].c_str(), extra_exr_type, EXR_PERCEPTUALLY_LOGARITHMIC,
+                             1, 1) == EXR_ERR_SUCCESS;
+    ok = ok && exr_set_compression(output, part, compression) == EXR_ERR_SUCCESS &&
+         exr_set_data_window(output, part, &data_window) == EXR_ERR_SUCCESS &&
+         exr_set_display_window(output, part, &display_window) == EXR_ERR_SUCCESS &&
+         exr_set_lineorder(output, part, EXR_LINEORDER_INCREASING_Y) == EXR_ERR_SUCCESS;
+    for (size_t a = 0; ok && a < attributes.size(); ++a) {
+        const HeaderAttribute& attribute = attributes[a];
+        const char* name = attribute.name.c_str();
+        switch (attribute.kind) {
+        case HeaderAttribute::Kind::Text: ok = exr_attr_set_string(output, part, name, attribute.text.c_str()) == 0; break;
+        case HeaderAttribute::Kind::Integer:
+            ok = exr_attr_set_int(output, part, name, static_cast<int32_t>(attribute.integer)) == 0;
+            break;
+        case HeaderAttribute::Kind::Real:
+            ok = exr_attr_set_float(output, part, name, static_cast<float>(attribute.real)) == 0;
+            break;
+        }
+    }
+    // Everything else (windows' companions, chromaticities, renderer metadata) as the input has it.
+    ok = ok && exr_copy_unset_attributes(output, part, input.context, 0) == EXR_ERR_SUCCESS;
+    errno = 0;
+    t_exr_message.clear();
+    if (ok && exr_write_header(output) != EXR_ERR_SUCCESS)  // the first bytes written: a full disk shows here
+        throw bad_input(reported_path, fmt::format("cannot create output ({})", failure_reason(errno)));
+    if (!ok) {
+        exr_finish(&output);
+        output = nullptr;
+        std::remove(path.c_str());
+        return nullptr;
+    }
+
+    const exr_attr_chlist_t* output_channels = nullptr;
+    exr_get_channels(output, part, &output_channels);
+    for (int c = 0; c < output_channels->num_channels; ++c) {
+        const State::Channel& place = places.at(output_channels->entries[c].name.str);
+        state->channels.push_back(place);
+        state->row_bytes += place.bytes * static_cast<size_t>(state->width);
+    }
+    state->chunk.resize(state->row_bytes * state->lines_per_chunk);
+    return std::unique_ptr<ZipScanlineWriter>(new ZipScanlineWriter(std::move(state)));
+}
+
+ZipScanlineWriter::ZipScanlineWriter(std::unique_ptr<State> state) : m_state(std::move(state)) {}
+
+ZipScanlineWriter::~ZipScanlineWriter() = default;
+
+void ZipScanlineWriter::write_rows(int row_begin, int row_end, const unsigned char* pixels)
+{
+    State& state = *m_state;
+    if (row_begin != state.next_row || row_end > state.height || row_end < row_begin)
+        throw internal_error(fmt::format("rows {}-{} written out of order (expected row {})", row_begin, row_end - 1,
+                                         state.next_row));
+    const size_t width = static_cast<size_t>(state.width);
+    for (int row = row_begin; row < row_end; ++row) {
+        // Interleaved pixels to the stored layout: one run of samples per channel.
+        const unsigned char* in = pixels + static_cast<size_t>(row - row_begin) * width * state.pixel_bytes;
+        unsigned char* out = state.chunk.data() + static_cast<size_t>(row - state.chunk_row) * state.row_bytes;
+        for (const State::Channel& channel : state.channels) {
+            if (channel.bytes == 2)
+                for (size_t x = 0; x < width; ++x)
+                    std::memcpy(out + x * 2, in + x * state.pixel_bytes + channel.offset, 2);
+            else
+                for (size_t x = 0; x < width; ++x)
+                    std::memcpy(out + x * 4, in + x * state.pixel_bytes + channel.offset, 4);
+            out += width * channel.bytes;
+        }
+        state.next_row = row + 1;
+        if (state.next_row == state.height || state.next_row - state.chunk_row == state.lines_per_chunk)
+            write_chunk();
+    }
+}
+
+void ZipScanlineWriter::write_chunk()
+{
+    State& state = *m_state;
+    const size_t raw_bytes = static_cast<size_t>(state.next_row - state.chunk_row) * state.row_bytes;
+    thread_local std::vector<unsigned char> predicted, compressed;
+    predicted.resize(raw_bytes);
+    split_and_difference(state.chunk.data(), raw_bytes, predicted.data());
+    libdeflate_compressor* compressor = thread_compressor();
+    compressed.resize(libdeflate_zlib_compress_bound(compressor, raw_bytes));
+    const size_t compressed_bytes =
+        libdeflate_zlib_compress(compressor, predicted.data(), raw_bytes, compressed.data(), compressed.size());
+    // A chunk that does not shrink is stored as is; readers tell by its size.
+    const bool stored_raw = compressed_bytes == 0 || compressed_bytes >= raw_bytes;
+    errno = 0;
+    t_exr_message.clear();
+    if (exr_write_scanline_chunk(state.context, 0, state.first_y + state.chunk_row,
+                                 stored_raw ? state.chunk.data() : compressed.data(),
+                                 stored_raw ? raw_bytes : compressed_bytes) != EXR_ERR_SUCCESS)
+        throw bad_input(state.reported_path, fmt::format("cannot write rows {}-{} ({})", state.chunk_row,
+                                                         state.next_row - 1, failure_reason(errno)));
+    state.chunk_row = state.next_row;
+}
+
+void ZipScanlineWriter::finish()
+{
+    State& state = *m_state;
+    if (state.next_row != state.height)
+        throw internal_error(fmt::format("output finished after {} of {} rows", state.next_row, state.height));
+    errno = 0;
+    t_exr_message.clear();
+    const exr_result_t result = exr_finish(&state.context);  // frees the context either way
+    state.context = nullptr;
+    if (result != EXR_ERR_SUCCESS)
+        throw bad_input(state.reported_path, fmt::format("cannot finish writing ({})", failure_reason(errno)));
+}
+
+}  // namespace modestack::io::detail
