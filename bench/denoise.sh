@@ -8,7 +8,8 @@
 # 3. Times the I/O floor (bench_io_floor: read all channels, write them back
 #    with 3 extra half channels, ZIP, frames in parallel), once with noise-like
 #    extra channels and once writing exactly the pixels of our gram output
-#    (ZIP's speed depends on the data; the second is the fair floor), and
+#    (ZIP's speed depends on the data; the second is the fair floor), the
+#    latter also through modestack's own I/O (bench_io_floor_modestack), and
 #    `modestack denoise --method gram|rsvd`, each with the default --max-memory
 #    and with --max-memory 512M, and gram with --no-mode-filter, REPEATS times
 #    each (default 3): wall time, CPU time, peak RSS (GNU time), phase times and
@@ -42,10 +43,12 @@ scripts/install-deps
 bench_require_packages time jq
 cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release -DMODESTACK_BUILD_TESTS=OFF \
     -DMODESTACK_BUILD_BENCH=ON >/dev/null
-cmake --build "$build_dir" --target modestack bench_make_noisy_sequence bench_io_floor >/dev/null
+cmake --build "$build_dir" --target modestack bench_make_noisy_sequence bench_io_floor bench_io_floor_modestack \
+    >/dev/null
 modestack=$build_dir/app/modestack
 make_sequence=$build_dir/bench/bench_make_noisy_sequence
 io_floor=$build_dir/bench/bench_io_floor
+io_floor_modestack=$build_dir/bench/bench_io_floor_modestack
 
 # make_data DIR SIZE FRAMES: the noisy sequence DIR/noisy.%04d.exr, made once.
 make_data()
@@ -94,6 +97,13 @@ floor_run()
         printf '%s\t%s\t%s\t%s\t%s\t%s\n' io-floor-content "$run" "$seconds" nan nan 0 >>"$tsv"
         echo "bench: io-floor-content run $run: $seconds s wall (own clock)" >&2
         content_bytes=$(du -sb "$floor" | cut -f1)
+        # The same bytes through modestack's own reader and writer (libdeflate for ZIP).
+        rm -rf "$floor"
+        mkdir -p "$floor"
+        seconds=$("$io_floor_modestack" "$data/noisy.%04d.exr" "$floor/floor.%04d.exr" 1 "$frames" 64 "$content" |
+            jq -r .seconds)
+        printf '%s\t%s\t%s\t%s\t%s\t%s\n' io-floor-modestack "$run" "$seconds" nan nan 0 >>"$tsv"
+        echo "bench: io-floor-modestack run $run: $seconds s wall (own clock)" >&2
     fi
     rm -rf "$floor"
 }
@@ -146,6 +156,7 @@ if [[ ${SKIP_LARGE:-0} != 1 ]]; then
     read -r floor_min floor_median < <(bench_stats "$tsv" io-floor 3)
     read -r floor_cpu_min floor_cpu_median < <(bench_stats "$tsv" io-floor 7)
     read -r content_min content_median < <(bench_stats "$tsv" io-floor-content 3)
+    read -r own_min own_median < <(bench_stats "$tsv" io-floor-modestack 3)
     read -r width height < <(echo "$size" | tr x ' ')
     input_bytes=$(du -sb "$data" | cut -f1)
     ratio() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", a / b }'; }
@@ -154,11 +165,15 @@ if [[ ${SKIP_LARGE:-0} != 1 ]]; then
         echo "Data: $frames frames of ${width}x${height} RGB half ZIP ($((input_bytes >> 20)) MiB in)."
         echo "I/O floor, noisy: reads every frame, writes R,G,B + 3 half channels of noise-like data ($((floor_bytes >> 20)) MiB)."
         echo "I/O floor, our bytes: reads every frame, writes the pixels of our gram output ($((content_bytes >> 20)) MiB, loaded before its clock starts)."
+        echo "I/O floor, our bytes, modestack's I/O: the same through io::SequenceReader and io::FrameOutput (libdeflate for ZIP), not OpenImageIO."
         echo
         echo "| run | wall s (min / med) | × floor, our bytes (min / med) | × floor, noisy (min / med) | CPU s (min / med) | CPU × noisy floor (med) | peak RSS MB (max of runs) | passes | band rows | statistics s | solve s | rebuild s | GMAC/s in statistics |"
         echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
         printf '| I/O floor, our bytes | %.1f / %.1f | 1.00 / 1.00 | %s / %s | – | – | – | 1 | 64 | | | | |\n' \
             "$content_min" "$content_median" "$(ratio "$content_min" "$floor_min")" "$(ratio "$content_median" "$floor_median")"
+        printf '| I/O floor, our bytes, modestack I/O | %.1f / %.1f | %s / %s | %s / %s | – | – | – | 1 | 64 | | | | |\n' \
+            "$own_min" "$own_median" "$(ratio "$own_min" "$content_min")" "$(ratio "$own_median" "$content_median")" \
+            "$(ratio "$own_min" "$floor_min")" "$(ratio "$own_median" "$floor_median")"
         printf '| I/O floor, noisy | %.1f / %.1f | %s / %s | 1.00 / 1.00 | %.1f / %.1f | 1.00 | %s | 1 | 64 | | | | |\n' \
             "$floor_min" "$floor_median" "$(ratio "$floor_min" "$content_min")" "$(ratio "$floor_median" "$content_median")" \
             "$floor_cpu_min" "$floor_cpu_median" \
