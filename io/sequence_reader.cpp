@@ -3,6 +3,7 @@
 #include "core/common/error.h"
 #include "io/detail/open_frame.h"
 #include "io/detail/open_image.h"
+#include "io/detail/zip_scanline_reader.h"
 #include "io/frame_header.h"
 #include "io/half_conversion.h"
 
@@ -37,6 +38,7 @@ std::unique_ptr<detail::OpenFrame> open_frame(const std::string& file, int frame
         offset += frame->spec.channelformat(c).size();
     }
     frame->native_pixel_bytes = offset;
+    frame->zip_layout = detail::zip_layout(*frame);
     return frame;
 }
 
@@ -46,6 +48,11 @@ void read_rows(const detail::OpenFrame& frame, int row_begin, int row_end, int c
                OIIO::TypeDesc type, void* destination)
 {
     const OIIO::ImageSpec& spec = frame.spec;
+    if (frame.zip_layout && type == OIIO::TypeUnknown) {
+        detail::read_zip_rows(frame, *frame.zip_layout, row_begin, row_end, channel_begin, channel_end,
+                              static_cast<unsigned char*>(destination));
+        return;
+    }
     int y_begin = spec.y + row_begin, y_end = spec.y + row_end;
     bool ok;
     if (spec.tile_width == 0) {

@@ -4,6 +4,8 @@ target_sources(modestack_io PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/frame_header.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/open_image.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sequence_reader.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/detail/zip_scanline_reader.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/detail/exr_core.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_output.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/zip_scanline_writer.cpp
   ${CMAKE_CURRENT_LIST_DIR}/half_conversion.cpp

@@ -10,6 +10,8 @@
 
 namespace modestack::io::detail {
 
+struct ZipLayout;
+
 struct OpenFrame {
     std::string file;
     int frame_number = 0;
@@ -18,6 +20,9 @@ struct OpenFrame {
     std::vector<int> selected;      ///< channel index of each selected channel in this file
     std::vector<size_t> byte_offset;  ///< byte offset of each channel in a native pixel
     size_t native_pixel_bytes = 0;
+    /// Set for a single-part ZIP/ZIPS scanline file: its rows are decoded with
+    /// libdeflate (zip_scanline_reader.h), not through `input`.
+    std::shared_ptr<const ZipLayout> zip_layout;
 };
 
 }  // namespace modestack::io::detail

@@ -1,6 +1,7 @@
 #include "io/detail/zip_scanline_writer.h"
 
 #include "core/common/error.h"
+#include "io/detail/exr_core.h"
 #include "io/detail/open_frame.h"
 
 #include <fmt/format.h>
@@ -18,26 +19,10 @@
 namespace modestack::io::detail {
 namespace {
 
-// The last message OpenEXR's Core reported on this thread (each writer's calls
-// all run on the thread that makes them).
-thread_local std::string t_exr_message;
-
-void remember_message(exr_const_context_t, exr_result_t, const char* message)
-{
-    t_exr_message = message ? message : "";
-}
-
-exr_context_initializer_t context_initializer()
-{
-    exr_context_initializer_t initializer = EXR_DEFAULT_CONTEXT_INITIALIZER;
-    initializer.error_handler_fn = &remember_message;
-    return initializer;
-}
-
 // The reason for a failed call: OpenEXR's message, plus the system's (e.g. a full disk).
 std::string failure_reason(int system_error)
 {
-    std::string reason = t_exr_message;
+    std::string reason = last_core_message();
     if (system_error != 0)
         reason = reason.empty() ? std::strerror(system_error) : fmt::format("{}: {}", reason, std::strerror(system_error));
     return reason;
@@ -46,15 +31,6 @@ std::string failure_reason(int system_error)
 // The level OpenEXR's C++ library (Imf::Header::zipCompressionLevel) writes ZIP at
 // by default, so outputs compress as the OpenImageIO path would.
 constexpr int kZipLevel = 4;
-
-struct ReadContext {
-    exr_context_t context = nullptr;
-    ~ReadContext()
-    {
-        if (context)
-            exr_finish(&context);
-    }
-};
 
 // ZIP's reversible pre-pass (OpenEXR internal_zip.c): the even bytes then the
 // odd bytes (into `split`), then each byte as the difference from the one
@@ -139,10 +115,10 @@ std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& pa
         return nullptr;
 
     // Only what this writer can copy exactly: one scanline part, ZIP or ZIPS, no subsampling.
-    ReadContext input;
-    exr_context_initializer_t initializer = context_initializer();
-    if (exr_start_read(&input.context, source.file.c_str(), &initializer) != EXR_ERR_SUCCESS)
+    CoreReadContext input(source.file);
+    if (!input.context)
         return nullptr;  // the OpenImageIO path reports what is wrong
+    exr_context_initializer_t initializer = core_initializer();
     int parts = 0;
     exr_storage_t storage = EXR_STORAGE_LAST_TYPE;
     exr_compression_t compression = EXR_COMPRESSION_LAST_TYPE;
@@ -225,7 +201,7 @@ std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& pa
     // Everything else (windows' companions, chromaticities, renderer metadata) as the input has it.
     ok = ok && exr_copy_unset_attributes(output, part, input.context, 0) == EXR_ERR_SUCCESS;
     errno = 0;
-    t_exr_message.clear();
+    clear_core_message();
     if (ok && exr_write_header(output) != EXR_ERR_SUCCESS)  // the first bytes written: a full disk shows here
         throw bad_input(reported_path, fmt::format("cannot create output ({})", failure_reason(errno)));
     if (!ok) {
@@ -291,7 +267,7 @@ void ZipScanlineWriter::write_chunk()
     // A chunk that does not shrink is stored as is; readers tell by its size.
     const bool stored_raw = compressed_bytes == 0 || compressed_bytes >= raw_bytes;
     errno = 0;
-    t_exr_message.clear();
+    clear_core_message();
     if (exr_write_scanline_chunk(state.context, 0, state.first_y + state.chunk_row,
                                  stored_raw ? state.chunk.data() : compressed.data(),
                                  stored_raw ? raw_bytes : compressed_bytes) != EXR_ERR_SUCCESS)
@@ -306,7 +282,7 @@ void ZipScanlineWriter::finish()
     if (state.next_row != state.height)
         throw internal_error(fmt::format("output finished after {} of {} rows", state.next_row, state.height));
     errno = 0;
-    t_exr_message.clear();
+    clear_core_message();
     const exr_result_t result = exr_finish(&state.context);  // frees the context either way
     state.context = nullptr;
     if (result != EXR_ERR_SUCCESS)
