@@ -79,12 +79,9 @@ int main(int argc, char** argv)
     try {
         io::SequenceReader reader(io::find_input_sequence(argv[1]), {});
         const std::vector<std::string> selected = reader.selected_channel_names();
-        std::vector<std::string> sigma_names;
-        for (const std::string& name : selected) {
-            const size_t dot = name.rfind('.');
-            sigma_names.push_back(dot == std::string::npos ? "sigma." + name
-                                                           : name.substr(0, dot) + ".sigma" + name.substr(dot));
-        }
+        std::vector<std::string> sigma_names;  // as modestack denoise names them
+        for (const io::SelectedLayer& layer : reader.layers())
+            sigma_names.insert(sigma_names.end(), layer.sigma_names.begin(), layer.sigma_names.end());
         std::vector<std::string> content_names = selected;
         content_names.insert(content_names.end(), sigma_names.begin(), sigma_names.end());
         std::vector<std::vector<float>> content(count);

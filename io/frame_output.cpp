@@ -50,6 +50,14 @@ void add_attributes(OIIO::ImageSpec& spec, const std::vector<HeaderAttribute>& a
     }
 }
 
+// The temporary name an output is written under; a killed run's leftovers in
+// its directory are removed first.
+std::string claim_temporary_path(const std::string& path)
+{
+    remove_stale_temporaries(path);
+    return temporary_path_for(path);
+}
+
 }  // namespace
 
 HeaderAttribute HeaderAttribute::of_text(std::string name, std::string value)
@@ -96,7 +104,7 @@ struct FrameOutput::State {
 FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, int frame_index,
                          const std::vector<std::string>& extra_channels,
                          const std::vector<HeaderAttribute>& attributes)
-    : m_path(path), m_state(std::make_unique<State>())
+    : m_path(path), m_temporary_path(claim_temporary_path(path)), m_state(std::make_unique<State>())
 {
     const detail::OpenFrame& source = reader.frame(frame_index);
     m_state->source = &source;
@@ -126,8 +134,6 @@ FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, 
     for (const auto* places : {&m_state->replaced_places, &m_state->extra_places})
         for (const ValuePlace& place : *places)
             m_state->all_places_half = m_state->all_places_half && place.type == OIIO::TypeDesc::HALF;
-    remove_stale_temporaries(m_path);
-    m_temporary_path = temporary_path_for(m_path);
     m_state->spec = spec;
     m_state->zip_writer =
         detail::ZipScanlineWriter::open(m_temporary_path, m_path, source, extra_channels, attributes);
@@ -137,7 +143,7 @@ FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, 
 
 FrameOutput::FrameOutput(const std::string& path, const NewImageDescription& image,
                          const std::vector<HeaderAttribute>& attributes)
-    : m_path(path), m_state(std::make_unique<State>())
+    : m_path(path), m_temporary_path(claim_temporary_path(path)), m_state(std::make_unique<State>())
 {
     OIIO::ImageSpec spec(image.width, image.height, static_cast<int>(image.channel_names.size()), OIIO::TypeFloat);
     spec.channelnames = image.channel_names;
@@ -160,10 +166,6 @@ void FrameOutput::open(const void* spec_pointer)
 {
     const OIIO::ImageSpec& spec = *static_cast<const OIIO::ImageSpec*>(spec_pointer);
     m_state->spec = spec;
-    if (m_temporary_path.empty()) {
-        remove_stale_temporaries(m_path);
-        m_temporary_path = temporary_path_for(m_path);
-    }
     m_state->output = OIIO::ImageOutput::create("openexr");
     if (!m_state->output)
         throw internal_error("OpenImageIO has no OpenEXR writer");

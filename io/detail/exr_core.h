@@ -3,6 +3,7 @@
 // and read contexts closed on every path out.
 #pragma once
 
+#include <OpenImageIO/imageio.h>
 #include <openexr.h>
 
 #include <string>
@@ -26,5 +27,19 @@ struct CoreReadContext {
     CoreReadContext(const CoreReadContext&) = delete;
     CoreReadContext& operator=(const CoreReadContext&) = delete;
 };
+
+/// What the ZIP reader and writer read of a file they can handle exactly: one
+/// scanline part, ZIP or ZIPS, no subsampled channel, and the data window and
+/// channel count OpenImageIO reports in its spec.
+struct ZipPart {
+    exr_compression_t compression = EXR_COMPRESSION_ZIP;
+    exr_attr_box2i_t data_window{};
+    const exr_attr_chlist_t* channels = nullptr;  ///< owned by the context
+    int lines_per_chunk() const { return compression == EXR_COMPRESSION_ZIP ? 16 : 1; }
+};
+
+/// Fills `part` from `context` (a file whose OpenImageIO spec is `spec`); false
+/// when the file is not such a file (the caller then uses OpenImageIO).
+bool read_zip_part(exr_const_context_t context, const OIIO::ImageSpec& spec, ZipPart& part);
 
 }  // namespace modestack::io::detail

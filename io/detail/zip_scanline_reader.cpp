@@ -53,36 +53,19 @@ std::shared_ptr<const ZipLayout> zip_layout(const OpenFrame& frame)
     if (const char* choice = std::getenv("MODESTACK_EXR_READER"); choice && std::strcmp(choice, "openimageio") == 0)
         return nullptr;
     const OIIO::ImageSpec& spec = frame.spec;
-    if (spec.tile_width != 0 || spec.depth > 1 || spec.deep)
-        return nullptr;
     CoreReadContext input(frame.file);
-    int parts = 0;
-    exr_storage_t storage = EXR_STORAGE_LAST_TYPE;
-    exr_compression_t compression = EXR_COMPRESSION_LAST_TYPE;
-    const exr_attr_chlist_t* channels = nullptr;
-    exr_attr_box2i_t data_window{};
-    if (!input.context || exr_get_count(input.context, &parts) != EXR_ERR_SUCCESS || parts != 1 ||
-        exr_get_storage(input.context, 0, &storage) != EXR_ERR_SUCCESS || storage != EXR_STORAGE_SCANLINE ||
-        exr_get_compression(input.context, 0, &compression) != EXR_ERR_SUCCESS ||
-        (compression != EXR_COMPRESSION_ZIP && compression != EXR_COMPRESSION_ZIPS) ||
-        exr_get_channels(input.context, 0, &channels) != EXR_ERR_SUCCESS ||
-        exr_get_data_window(input.context, 0, &data_window) != EXR_ERR_SUCCESS)
-        return nullptr;
-    const int width = data_window.max.x - data_window.min.x + 1;
-    if (width != spec.width || data_window.max.y - data_window.min.y + 1 != spec.height ||
-        data_window.min.y != spec.y || channels->num_channels != spec.nchannels)
+    ZipPart part;
+    if (!input.context || !read_zip_part(input.context, spec, part))
         return nullptr;
     auto layout = std::make_shared<ZipLayout>();
-    layout->lines_per_chunk = compression == EXR_COMPRESSION_ZIP ? 16 : 1;
-    layout->first_y = data_window.min.y;
+    layout->lines_per_chunk = part.lines_per_chunk();
+    layout->first_y = part.data_window.min.y;
     std::map<std::string, std::pair<std::size_t, std::size_t>> places;  // name → offset, bytes
-    for (int c = 0; c < channels->num_channels; ++c) {
-        const exr_attr_chlist_entry_t& channel = channels->entries[c];
-        if (channel.x_sampling != 1 || channel.y_sampling != 1)
-            return nullptr;
+    for (int c = 0; c < part.channels->num_channels; ++c) {
+        const exr_attr_chlist_entry_t& channel = part.channels->entries[c];
         const std::size_t bytes = channel.pixel_type == EXR_PIXEL_HALF ? 2 : 4;
         places[channel.name.str] = {layout->row_bytes, bytes};
-        layout->row_bytes += bytes * static_cast<std::size_t>(width);
+        layout->row_bytes += bytes * static_cast<std::size_t>(spec.width);
     }
     for (int c = 0; c < spec.nchannels; ++c) {
         const auto place = places.find(spec.channelnames[c]);

@@ -111,27 +111,19 @@ std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& pa
     if (const char* choice = std::getenv("MODESTACK_EXR_WRITER"); choice && std::strcmp(choice, "openimageio") == 0)
         return nullptr;
     const OIIO::ImageSpec& spec = source.spec;
-    if (spec.tile_width != 0 || spec.depth > 1 || source.selected.empty())
+    if (source.selected.empty())
         return nullptr;
 
-    // Only what this writer can copy exactly: one scanline part, ZIP or ZIPS, no subsampling.
+    // Only what this writer can copy exactly (the OpenImageIO path reports what is wrong with the rest).
     CoreReadContext input(source.file);
-    if (!input.context)
-        return nullptr;  // the OpenImageIO path reports what is wrong
-    exr_context_initializer_t initializer = core_initializer();
-    int parts = 0;
-    exr_storage_t storage = EXR_STORAGE_LAST_TYPE;
-    exr_compression_t compression = EXR_COMPRESSION_LAST_TYPE;
-    const exr_attr_chlist_t* input_channels = nullptr;
-    exr_attr_box2i_t data_window{}, display_window{};
-    if (exr_get_count(input.context, &parts) != EXR_ERR_SUCCESS || parts != 1 ||
-        exr_get_storage(input.context, 0, &storage) != EXR_ERR_SUCCESS || storage != EXR_STORAGE_SCANLINE ||
-        exr_get_compression(input.context, 0, &compression) != EXR_ERR_SUCCESS ||
-        (compression != EXR_COMPRESSION_ZIP && compression != EXR_COMPRESSION_ZIPS) ||
-        exr_get_channels(input.context, 0, &input_channels) != EXR_ERR_SUCCESS ||
-        exr_get_data_window(input.context, 0, &data_window) != EXR_ERR_SUCCESS ||
+    ZipPart input_part;
+    exr_attr_box2i_t display_window{};
+    if (!input.context || !read_zip_part(input.context, spec, input_part) ||
         exr_get_display_window(input.context, 0, &display_window) != EXR_ERR_SUCCESS)
         return nullptr;
+    const exr_attr_chlist_t* input_channels = input_part.channels;
+    const exr_attr_box2i_t& data_window = input_part.data_window;
+    exr_context_initializer_t initializer = core_initializer();
 
     // Where each channel sits in an interleaved pixel, by name.
     std::map<std::string, State::Channel> places;
@@ -146,23 +138,17 @@ std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& pa
                                                               extra_type.size()})
                  .second)
             return nullptr;
-    if (input_channels->num_channels != spec.nchannels)
-        return nullptr;
-    for (int c = 0; c < input_channels->num_channels; ++c) {
-        const exr_attr_chlist_entry_t& channel = input_channels->entries[c];
-        if (channel.x_sampling != 1 || channel.y_sampling != 1 || !places.count(channel.name.str))
+    for (int c = 0; c < input_channels->num_channels; ++c)
+        if (!places.count(input_channels->entries[c].name.str))
             return nullptr;
-    }
 
     auto state = std::make_unique<State>();
     state->reported_path = reported_path;
-    state->width = data_window.max.x - data_window.min.x + 1;
-    state->height = data_window.max.y - data_window.min.y + 1;
+    state->width = spec.width;
+    state->height = spec.height;
     state->first_y = data_window.min.y;
-    state->lines_per_chunk = compression == EXR_COMPRESSION_ZIP ? 16 : 1;
+    state->lines_per_chunk = input_part.lines_per_chunk();
     state->pixel_bytes = source.native_pixel_bytes + extra_channels.size() * extra_type.size();
-    if (state->width != spec.width || state->height != spec.height)
-        return nullptr;
 
     // A header this writer cannot build (an attribute OpenEXR's Core refuses) is
     // left to OpenImageIO too: the temporary file is removed and nullptr returned.
@@ -181,7 +167,7 @@ std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& pa
     for (size_t k = 0; ok && k < extra_channels.size(); ++k)
         ok = exr_add_channel(output, part, extra_channels[k].c_str(), extra_exr_type, EXR_PERCEPTUALLY_LOGARITHMIC,
                              1, 1) == EXR_ERR_SUCCESS;
-    ok = ok && exr_set_compression(output, part, compression) == EXR_ERR_SUCCESS &&
+    ok = ok && exr_set_compression(output, part, input_part.compression) == EXR_ERR_SUCCESS &&
          exr_set_data_window(output, part, &data_window) == EXR_ERR_SUCCESS &&
          exr_set_display_window(output, part, &display_window) == EXR_ERR_SUCCESS &&
          exr_set_lineorder(output, part, EXR_LINEORDER_INCREASING_Y) == EXR_ERR_SUCCESS;
