@@ -29,9 +29,10 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
-// Per-sample images the mode filter's guide holds over a band with its halo (the
-// guide, its noise and their smoothed copies: mode_filter.cpp).
-constexpr int kGuideImages = 6;
+// Per-sample images the mode filter's guide holds over a band with its halo: the
+// guide and its noise (float) and the smoothing's horizontal pass (double), see
+// filter_weights.cpp.
+constexpr int kGuideImages = 4;
 
 // Rows [row_begin, row_end) of every frame: sample i of frame t is data[t * stride + i].
 // Either read from the source into `storage`, or a window into the kept shot.
@@ -73,12 +74,14 @@ public:
                 m_report.feature_guide = m_features->summary();
             }
             needs.halo_rows = std::max(needs.halo_rows, mode_filter_halo(m_filter_options));
-            // The surveyed coefficients, the guide with its noise (a few images) and
-            // the feature rows over the halo; the filtered coefficients, their gains
-            // and one frame's kept noise per worker over the band.
+            // Over the halo: the surveyed coefficients twice (as projected and the
+            // survey's [pixel][mode] copy), the guide with its noise (a few images)
+            // and the feature rows twice (as read and the guide's planar copy).
+            // Over the band: the filtered coefficients, their gains and one frame's
+            // kept noise per worker.
             const int surveyed = std::max(m_settings.mode_filter.max_modes, largest_rank);
-            needs.halo_images = surveyed + kGuideImages +
-                                (m_filter_options.feature_channels + m_shape.channels - 1) / m_shape.channels;
+            needs.halo_images = 2 * surveyed + kGuideImages +
+                                2 * ((m_filter_options.feature_channels + m_shape.channels - 1) / m_shape.channels);
             needs.band_images = 2 * surveyed + tbb::this_task_arena::max_concurrency();
         }
         // Each worker's residual rows (double) of sigma's windows.

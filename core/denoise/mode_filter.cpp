@@ -1,5 +1,8 @@
 #include "core/denoise/mode_filter.h"
 
+#include "core/denoise/filter_weights.h"
+#include "core/denoise/guided_filter.h"
+
 #include "core/common/error.h"
 #include "core/common/progress.h"
 #include "core/common/scratch_buffer.h"
@@ -22,240 +25,6 @@ using lowrank::MutableBandView;
 // modes by at most ~2.05× on our renders; a larger high-pass ratio is texture or
 // edges, not noise, and must not make a clean (or nearly clean) shot look noisy.
 constexpr double kMaximumNoiseScale = 4.0;
-
-int kernel_radius(double width) { return width > 0 ? static_cast<int>(std::ceil(2.5 * width)) : 0; }
-
-// Normalised 1D Gaussian of width σ on [−radius, radius].
-std::vector<double> gaussian_1d(double width)
-{
-    int radius = kernel_radius(width);
-    std::vector<double> kernel(2 * radius + 1);
-    double sum = 0;
-    for (int d = -radius; d <= radius; ++d)
-        sum += kernel[d + radius] = std::exp(-0.5 * d * d / (width * width));
-    for (double& value : kernel)
-        value /= sum;
-    return kernel;
-}
-
-// Σ taps and Σ taps² over the part of a window of `radius` centred at `at` that
-// lies inside [0, length): a window's weight and noise gain where the band clips it.
-void clipped_tap_sums(const std::vector<double>& taps, int radius, int at, int length, double& sum, double& squares)
-{
-    sum = squares = 0;
-    for (int q = std::max(0, at - radius); q <= std::min(length - 1, at + radius); ++q)
-        sum += taps[q - at + radius], squares += taps[q - at + radius] * taps[q - at + radius];
-}
-
-// Smooths `image` ([y][x][c] rows of the band) with the separable Gaussian of
-// `width`, clipped at the band's edges and renormalised by the clipped window's
-// weight (a box product, so still separable), and hands each smoothed row y of
-// [y0, y1) to row_done(y, values), from parallel workers.
-template <typename RowDone>
-void smooth_clipped(const float* image, const ImageBandShape& shape, double width, int y0, int y1, RowDone&& row_done)
-{
-    const std::vector<double> taps = gaussian_1d(width);
-    const int radius = kernel_radius(width);
-    const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
-    const int first_row = std::max(0, y0 - radius), last_row = std::min(shape.height - 1, y1 - 1 + radius);
-    const auto clipped_weight = [&](int at, int length) {
-        double sum = 0, squares = 0;
-        clipped_tap_sums(taps, radius, at, length, sum, squares);
-        return sum;
-    };
-    std::vector<double> horizontal(static_cast<std::size_t>(last_row - first_row + 1) * row_length);
-    tbb::parallel_for(first_row, last_row + 1, [&](int y) {
-        const float* row = image + y * row_length;
-        double* target = horizontal.data() + (y - first_row) * row_length;
-        for (int x = 0; x < shape.width; ++x)
-            for (int c = 0; c < shape.channels; ++c) {
-                double sum = 0;
-                for (int q = std::max(0, x - radius); q <= std::min(shape.width - 1, x + radius); ++q)
-                    sum += taps[q - x + radius] * row[q * shape.channels + c];
-                target[x * shape.channels + c] = sum;
-            }
-    });
-    std::vector<double> column_weight(static_cast<std::size_t>(shape.width));
-    for (int x = 0; x < shape.width; ++x)
-        column_weight[static_cast<std::size_t>(x)] = clipped_weight(x, shape.width);
-    tbb::parallel_for(y0, y1, [&](int y) {
-        const double row_weight = clipped_weight(y, shape.height);
-        std::vector<double> sum(static_cast<std::size_t>(row_length), 0.0);
-        for (int q = std::max(0, y - radius); q <= std::min(shape.height - 1, y + radius); ++q) {
-            const double tap = taps[q - y + radius];
-            const double* source = horizontal.data() + (q - first_row) * row_length;
-            for (std::int64_t k = 0; k < row_length; ++k)
-                sum[static_cast<std::size_t>(k)] += tap * source[k];
-        }
-        for (int x = 0; x < shape.width; ++x) {
-            const double total = column_weight[static_cast<std::size_t>(x)] * row_weight;
-            for (int c = 0; c < shape.channels; ++c)
-                sum[static_cast<std::size_t>(x * shape.channels + c)] /= total;
-        }
-        row_done(y, static_cast<const double*>(sum.data()));
-    });
-}
-
-// The guide of a band: c_1 pre-smoothed (clipped and renormalised at the band's
-// edges) and the noise variance of each of its samples.
-struct Guide {
-    std::vector<double> value;
-    std::vector<double> noise;
-    const float* features = nullptr;  // normalised features [y][x][k] (feature_guide.h), or none
-    int feature_channels = 0;
-};
-
-Guide build_guide(const BandView& coefficients, const std::vector<float>& noise_variance, const ImageBandShape& shape,
-                  double smoothing)
-{
-    const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
-    const std::size_t samples = static_cast<std::size_t>(row_length) * shape.height;
-    Guide guide;
-    guide.value.assign(samples, 0.0);
-    guide.noise.assign(samples, 0.0);
-    if (smoothing <= 0) {
-        for (std::size_t i = 0; i < samples; ++i)
-            guide.value[i] = coefficients.data[i], guide.noise[i] = noise_variance[i];
-        return guide;
-    }
-    double gain_1d = 0;  // Σ k²: the white-noise variance gain per dimension (interior)
-    for (double value : gaussian_1d(smoothing))
-        gain_1d += value * value;
-    smooth_clipped(coefficients.data, shape, smoothing, 0, shape.height, [&](int y, const double* row) {
-        const std::int64_t first = y * row_length;
-        std::copy(row, row + row_length, guide.value.begin() + first);
-        for (std::int64_t k = first; k < first + row_length; ++k)
-            guide.noise[static_cast<std::size_t>(k)] = noise_variance[static_cast<std::size_t>(k)] * gain_1d * gain_1d;
-    });
-    return guide;
-}
-
-// Weights of one candidate filter around pixel (x, y), clipped to the band.
-class WeightWindow {
-public:
-    WeightWindow(const Guide& guide, const ImageBandShape& shape) : m_guide(guide), m_shape(shape) {}
-
-    // Fills the weights of `candidate` (width > 0) around (x, y); returns their sum.
-    double compute(const FilterCandidate& candidate, int x, int y)
-    {
-        const int radius = kernel_radius(candidate.width);
-        x0 = std::max(0, x - radius), x1 = std::min(m_shape.width - 1, x + radius);
-        y0 = std::max(0, y - radius), y1 = std::min(m_shape.height - 1, y + radius);
-        weights.resize(static_cast<std::size_t>(x1 - x0 + 1) * (y1 - y0 + 1));
-        const double spatial_scale = -0.5 / (candidate.width * candidate.width);
-        const double range_scale =
-            candidate.range > 0 ? -0.5 / (candidate.range * candidate.range * m_shape.channels) : 0.0;
-        const int feature_channels = m_guide.feature_channels;
-        const double feature_scale =
-            candidate.feature_range > 0 && m_guide.features
-                ? -0.5 / (candidate.feature_range * candidate.feature_range * feature_channels)
-                : 0.0;
-        const float* centre_features =
-            feature_scale != 0 ? m_guide.features + (static_cast<std::int64_t>(y) * m_shape.width + x) * feature_channels
-                               : nullptr;
-        const std::int64_t row_length = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
-        const std::int64_t centre = y * row_length + static_cast<std::int64_t>(x) * m_shape.channels;
-        // Without a range or feature term the weight depends on the squared distance
-        // alone: looked up, not an exp per tap (the same values).
-        const bool unguided = range_scale == 0 && feature_scale == 0;
-        const double* spatial = unguided ? spatial_weights(candidate.width, radius).data() : nullptr;
-        double sum = 0;
-        std::size_t index = 0;
-        for (int qy = y0; qy <= y1; ++qy)
-            for (int qx = x0; qx <= x1; ++qx, ++index) {
-                const int distance2 = (qx - x) * (qx - x) + (qy - y) * (qy - y);
-                double exponent = spatial_scale * distance2;
-                if (range_scale != 0) {
-                    const std::int64_t other = qy * row_length + static_cast<std::int64_t>(qx) * m_shape.channels;
-                    double distance = 0;  // squared guide difference in units of its noise
-                    for (int c = 0; c < m_shape.channels; ++c) {
-                        double difference = m_guide.value[centre + c] - m_guide.value[other + c];
-                        distance += difference * difference /
-                                    (m_guide.noise[centre + c] + m_guide.noise[other + c] + 1e-30);
-                    }
-                    exponent += range_scale * distance;
-                }
-                if (feature_scale != 0) {
-                    const float* other =
-                        m_guide.features + (static_cast<std::int64_t>(qy) * m_shape.width + qx) * feature_channels;
-                    double distance = 0;
-                    for (int k = 0; k < feature_channels; ++k) {
-                        const double difference = static_cast<double>(centre_features[k]) - other[k];
-                        distance += difference * difference;
-                    }
-                    exponent += feature_scale * distance;
-                }
-                // A guided weight in float precision (1e-7) is plenty for a filter
-                // weight, and expf costs a fraction of exp.
-                sum += weights[index] = unguided ? spatial[distance2]
-                                                 : std::exp(static_cast<float>(exponent));
-            }
-        self = static_cast<std::size_t>(y - y0) * (x1 - x0 + 1) + (x - x0);
-        return sum;
-    }
-
-    // Σ_q w_q · image(q, c) over the window for every channel c into sums[c],
-    // image = [y][x][c] of the band, each sum in the order apply() takes. RGB (the
-    // usual layer) in one pass over the weights, with its sums in registers.
-    void apply_all(const float* image, double* sums) const
-    {
-        if (m_shape.channels != 3) {
-            for (int c = 0; c < m_shape.channels; ++c)
-                sums[c] = apply(image, c);
-            return;
-        }
-        const std::int64_t row_length = static_cast<std::int64_t>(m_shape.width) * 3;
-        double red = 0, green = 0, blue = 0;
-        std::size_t index = 0;
-        for (int qy = y0; qy <= y1; ++qy) {
-            const float* row = image + qy * row_length + static_cast<std::int64_t>(x0) * 3;
-            for (int qx = x0; qx <= x1; ++qx, ++index, row += 3) {
-                const double weight = weights[index];
-                red += weight * row[0];
-                green += weight * row[1];
-                blue += weight * row[2];
-            }
-        }
-        sums[0] = red, sums[1] = green, sums[2] = blue;
-    }
-
-    // Σ_q w_q · image(q, c) over the window, image = [y][x][c] of the band.
-    double apply(const float* image, int c) const
-    {
-        const std::int64_t row_length = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
-        double sum = 0;
-        std::size_t index = 0;
-        for (int qy = y0; qy <= y1; ++qy) {
-            const float* row = image + qy * row_length + c;
-            for (int qx = x0; qx <= x1; ++qx, ++index)
-                sum += weights[index] * row[static_cast<std::int64_t>(qx) * m_shape.channels];
-        }
-        return sum;
-    }
-
-    std::vector<double> weights;
-    std::size_t self = 0;
-    int x0 = 0, x1 = 0, y0 = 0, y1 = 0;
-
-private:
-    // exp(−d² / 2σ²) for every squared distance d² a window of `radius` holds.
-    const std::vector<double>& spatial_weights(double width, int radius)
-    {
-        for (const auto& [table_width, table] : m_spatial_tables)
-            if (table_width == width)
-                return table;
-        std::vector<double> table(static_cast<std::size_t>(2 * radius * radius + 1));
-        const double spatial_scale = -0.5 / (width * width);
-        for (std::size_t d2 = 0; d2 < table.size(); ++d2)
-            table[d2] = std::exp(spatial_scale * static_cast<int>(d2));
-        m_spatial_tables.emplace_back(width, std::move(table));
-        return m_spatial_tables.back().second;
-    }
-
-    const Guide& m_guide;
-    const ImageBandShape& m_shape;
-    std::vector<std::pair<double, std::vector<double>>> m_spatial_tables;
-};
 
 // A filter without a range or feature term is a Gaussian, separable also where
 // the band clips it (the clipped window is a box): it is applied as a horizontal
@@ -406,15 +175,40 @@ void SureSurvey::add_band(const BandView& coefficients, const std::vector<float>
     check_band(coefficients, noise_variance, shape, valid_y0, valid_y1, "SureSurvey::add_band");
     if (coefficients.frames != m_modes || shape.width != m_width || shape.channels != m_channels)
         throw internal_error("SureSurvey::add_band: band does not match the survey");
-    Guide guide = build_guide(coefficients, noise_variance, shape, m_options.guide_smoothing);
-    if (m_options.feature_channels > 0) {
-        if (!features)
-            throw internal_error("SureSurvey::add_band: the survey expects feature rows");
-        guide.features = features, guide.feature_channels = m_options.feature_channels;
-    }
+    if (m_options.feature_channels > 0 && !features)
+        throw internal_error("SureSurvey::add_band: the survey expects feature rows");
+    const Guide guide = build_guide(coefficients, noise_variance, shape, m_options.guide_smoothing, features,
+                                    m_options.feature_channels);
+    int widest = 0;
+    for (const FilterCandidate& candidate : m_candidates)
+        widest = std::max(widest, kernel_radius(candidate.width));
     const int candidates = static_cast<int>(m_candidates.size());
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
     throw_if_cancelled();
+    // The surveyed modes of the rows the windows reach, as [y][x][mode][c]: every
+    // tap of a window then adds one contiguous run of all the modes' samples.
+    const int per_pixel = m_modes * shape.channels;
+    int first_surveyed = valid_y0;
+    while (first_surveyed < valid_y1 && (band_y0 + first_surveyed) % m_stride != 0)
+        ++first_surveyed;
+    ScratchBuffer<float> pixels;  // every value written before it is read
+    int reach_y0 = 0;
+    if (first_surveyed < valid_y1) {
+        const int last_surveyed = first_surveyed + (valid_y1 - 1 - first_surveyed) / m_stride * m_stride;
+        reach_y0 = std::max(0, first_surveyed - widest);
+        const int reach_y1 = std::min(shape.height, last_surveyed + widest + 1);
+        pixels.resize(static_cast<std::size_t>(reach_y1 - reach_y0) * shape.width * per_pixel);
+        tbb::parallel_for(reach_y0, reach_y1, [&](int y) {
+            for (int x = 0; x < shape.width; ++x) {
+                const std::int64_t pixel = static_cast<std::int64_t>(y) * shape.width + x;
+                float* target = pixels.data() + (pixel - static_cast<std::int64_t>(reach_y0) * shape.width) * per_pixel;
+                for (int j = 0; j < m_modes; ++j)
+                    for (int c = 0; c < shape.channels; ++c)
+                        target[j * shape.channels + c] =
+                            coefficients.data[j * coefficients.frame_stride + pixel * shape.channels + c];
+            }
+        });
+    }
     tbb::parallel_for(valid_y0, valid_y1, [&](int y) {
         const int image_y = band_y0 + y;
         std::vector<double>& sums = m_rows[static_cast<std::size_t>(image_y)];
@@ -425,9 +219,10 @@ void SureSurvey::add_band(const BandView& coefficients, const std::vector<float>
         double* energy = fit_trace + static_cast<std::size_t>(m_modes) * candidates * 2;
         double& noise = energy[m_modes];
         double* high_pass_energy = energy + m_modes + 1;
-        WeightWindow window(guide, shape);
-        std::vector<double> applied(static_cast<std::size_t>(shape.channels));
+        WeightWindow window(guide, widest);
+        std::vector<float> applied(static_cast<std::size_t>(per_pixel));
         for (int x = 0; x < shape.width; x += m_stride) {
+            window.centre(x, y);
             const std::int64_t pixel = y * row_length + static_cast<std::int64_t>(x) * shape.channels;
             for (int c = 0; c < shape.channels; ++c) {
                 const double variance = noise_variance[pixel + c];
@@ -454,14 +249,15 @@ void SureSurvey::add_band(const BandView& coefficients, const std::vector<float>
             }
             for (int k = 1; k < candidates; ++k) {
                 const bool guided = m_candidates[k].range > 0;
-                const double sum = window.compute(m_candidates[k], x, y);
+                const double sum = window.compute(m_candidates[k]);
                 const double self = window.weights[window.self] / sum;
+                window.apply(pixels.data(), reach_y0, per_pixel, applied.data());
                 for (int j = guided ? 1 : 0; j < m_modes; ++j) {
                     const float* image = coefficients.data + j * coefficients.frame_stride;
                     double* slot = fit_trace + (static_cast<std::size_t>(j) * candidates + k) * 2;
-                    window.apply_all(image, applied.data());
                     for (int c = 0; c < shape.channels; ++c) {
-                        const double difference = applied[static_cast<std::size_t>(c)] / sum - image[pixel + c];
+                        const double difference =
+                            applied[static_cast<std::size_t>(j * shape.channels + c)] / sum - image[pixel + c];
                         slot[0] += difference * difference;
                         slot[1] += noise_variance[pixel + c] * self;
                     }
@@ -568,59 +364,29 @@ void filter_coefficients(const BandView& coefficients, const std::vector<float>&
         throw internal_error("filter_coefficients: output does not match the plan");
     const std::int64_t valid_pixels = static_cast<std::int64_t>(shape.width) * (valid_y1 - valid_y0);
     gains.assign(static_cast<std::size_t>(valid_pixels) * rank, 1.0f);
-    Guide guide = build_guide(coefficients, noise_variance, shape, plan.guide_smoothing);
-    if (plan.feature_channels > 0) {
-        if (!features)
-            throw internal_error("filter_coefficients: the plan expects feature rows");
-        guide.features = features, guide.feature_channels = plan.feature_channels;
-    }
+    if (plan.feature_channels > 0 && !features)
+        throw internal_error("filter_coefficients: the plan expects feature rows");
     throw_if_cancelled();
-    // Modes whose filter has no range or feature term are filtered separably here;
-    // the per-pixel windows below do the others.
-    std::vector<bool> separable(static_cast<std::size_t>(rank), false);
+    // Each mode: unfiltered (copied), a plain Gaussian (separable), or guided.
+    std::vector<GuidedImage> guided;
     for (int j = 0; j < rank; ++j) {
         const FilterCandidate& candidate = plan.candidates[plan.modes[j].candidate];
-        const bool feature_term = candidate.feature_range > 0 && guide.features;
-        if (candidate.width <= 0 || candidate.range > 0 || feature_term)
-            continue;
-        separable[static_cast<std::size_t>(j)] = true;
-        separable_gaussian(coefficients.data + j * coefficients.frame_stride, shape, valid_y0, valid_y1,
-                           candidate.width, filtered.data + j * filtered.frame_stride,
-                           gains.data() + j * valid_pixels);
-    }
-    tbb::parallel_for(valid_y0, valid_y1, [&](int y) {
-        WeightWindow window(guide, shape);
-        std::vector<double> applied(static_cast<std::size_t>(shape.channels));
-        for (int x = 0; x < shape.width; ++x) {
-            const std::int64_t pixel = y * row_length + static_cast<std::int64_t>(x) * shape.channels;
-            const std::int64_t out = pixel - valid_y0 * row_length;
-            const std::int64_t out_pixel = static_cast<std::int64_t>(y - valid_y0) * shape.width + x;
-            int windowed = -1;  // the candidate window.weights hold: modes often share one
-            double sum = 0, squares = 0;
-            for (int j = 0; j < rank; ++j) {
-                if (separable[static_cast<std::size_t>(j)])
-                    continue;
-                const FilterCandidate& candidate = plan.candidates[plan.modes[j].candidate];
-                const float* image = coefficients.data + j * coefficients.frame_stride;
-                if (candidate.width <= 0) {
-                    for (int c = 0; c < shape.channels; ++c)
-                        filtered.at(out + c, j) = image[pixel + c];
-                    continue;
-                }
-                if (plan.modes[j].candidate != windowed) {
-                    windowed = plan.modes[j].candidate;
-                    sum = window.compute(candidate, x, y);
-                    squares = 0;
-                    for (double weight : window.weights)
-                        squares += weight * weight;
-                }
-                gains[static_cast<std::size_t>(j * valid_pixels + out_pixel)] = static_cast<float>(squares / (sum * sum));
-                window.apply_all(image, applied.data());
-                for (int c = 0; c < shape.channels; ++c)
-                    filtered.at(out + c, j) = static_cast<float>(applied[static_cast<std::size_t>(c)] / sum);
-            }
+        const float* image = coefficients.data + j * coefficients.frame_stride;
+        float* out = filtered.data + j * filtered.frame_stride;
+        const bool feature_term = candidate.feature_range > 0 && plan.feature_channels > 0;
+        if (candidate.width <= 0) {
+            std::copy(image + valid_y0 * row_length, image + valid_y1 * row_length, out);
+        } else if (candidate.range <= 0 && !feature_term) {
+            separable_gaussian(image, shape, valid_y0, valid_y1, candidate.width, out, gains.data() + j * valid_pixels);
+        } else {
+            guided.push_back({candidate, image, out, gains.data() + j * valid_pixels});
         }
-    });
+    }
+    if (!guided.empty()) {
+        const Guide guide = build_guide(coefficients, noise_variance, shape, plan.guide_smoothing, features,
+                                        plan.feature_channels);
+        guided_filter(guide, valid_y0, valid_y1, guided);
+    }
 }
 
 }  // namespace modestack::denoise

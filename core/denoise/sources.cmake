@@ -3,6 +3,8 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/block_gram.cpp
   ${CMAKE_CURRENT_LIST_DIR}/engine.cpp
   ${CMAKE_CURRENT_LIST_DIR}/feature_guide.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/filter_weights.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/guided_filter.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mode_filter.cpp)
 target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/non_negative.cpp
@@ -15,3 +17,11 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/weight_smoothing.cpp
   ${CMAKE_CURRENT_LIST_DIR}/whitening.cpp
   ${CMAKE_CURRENT_LIST_DIR}/surface_filter.cpp)
+# The filter weights' exp clamps with a compare-and-select, which GCC evaluates on
+# every vector lane only without trapping maths (floating-point exceptions are
+# never enabled here; each operation still rounds as IEEE says). Not project-wide:
+# it made row_median's partition loop 1.5x slower.
+set_source_files_properties(
+  ${CMAKE_CURRENT_LIST_DIR}/filter_weights.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/guided_filter.cpp
+  PROPERTIES COMPILE_OPTIONS -fno-trapping-math)

@@ -1,5 +1,6 @@
 #include "core/lowrank/confidence.h"
 
+#include "core/common/avx2_clones.h"
 #include "core/common/error.h"
 #include "core/common/progress.h"
 #include "core/common/scratch_buffer.h"
@@ -84,9 +85,27 @@ void for_each_window_shape(int width, int radius, EdgePixel&& edge_pixel, InnerR
         edge_pixel(x);
 }
 
+// The window means of the pixels [inner_first, inner_end) of a row whose windows
+// are not clipped in x: all their samples at once, each window summed in the
+// order of the edge pixels' loop (the same bits as summing each window alone).
+MODESTACK_AVX2_CLONES void inner_window_mean(const double* column_sum, double* window_sum, float* out_row,
+                                             int inner_first, int inner_end, int radius, int channels, double count)
+{
+    const std::int64_t first = static_cast<std::int64_t>(inner_first) * channels;
+    const std::int64_t last = static_cast<std::int64_t>(inner_end) * channels;
+    std::fill(window_sum + first, window_sum + last, 0.0);
+    for (int d = -radius; d <= radius; ++d) {
+        const double* source = column_sum + static_cast<std::int64_t>(d) * channels;
+        for (std::int64_t k = first; k < last; ++k)
+            window_sum[k] += source[k];
+    }
+    for (std::int64_t k = first; k < last; ++k)
+        out_row[k] = static_cast<float>(window_sum[k] / count);
+}
+
 // Writes the mean over the (2·radius+1)² window (clipped at the band) of
 // sample(y, k) for the output rows of frame t into `out`'s frame t.
-void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, int valid_y0, int valid_y1,
+MODESTACK_AVX2_CLONES void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, int valid_y0, int valid_y1,
                    float* out_frame, std::vector<double>& column_sum, std::vector<double>& window_sum)
 {
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
@@ -99,20 +118,9 @@ void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, 
                 column_sum[static_cast<std::size_t>(k)] += sample(source_y, k);
         const int rows_in_window = y_last - y_first + 1;
         float* out_row = out_frame + (y - valid_y0) * row_length;
-        // The inner run sums all its samples at once, in the order of the edge
-        // pixels' loop (the same bits as summing each window alone).
         const auto inner_run = [&](int inner_first, int inner_end) {
-            const std::int64_t first = static_cast<std::int64_t>(inner_first) * shape.channels;
-            const std::int64_t last = static_cast<std::int64_t>(inner_end) * shape.channels;
-            const double count = static_cast<double>(rows_in_window) * (2 * radius + 1);
-            std::fill(window_sum.begin() + first, window_sum.begin() + last, 0.0);
-            for (int d = -radius; d <= radius; ++d) {
-                const double* source = column_sum.data() + static_cast<std::int64_t>(d) * shape.channels;
-                for (std::int64_t k = first; k < last; ++k)
-                    window_sum[static_cast<std::size_t>(k)] += source[k];
-            }
-            for (std::int64_t k = first; k < last; ++k)
-                out_row[k] = static_cast<float>(window_sum[static_cast<std::size_t>(k)] / count);
+            inner_window_mean(column_sum.data(), window_sum.data(), out_row, inner_first, inner_end, radius,
+                              shape.channels, static_cast<double>(rows_in_window) * (2 * radius + 1));
         };
         const auto edge_pixel = [&](int x) {
             const int x_first = std::max(0, x - radius);

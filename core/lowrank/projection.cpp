@@ -1,5 +1,6 @@
 #include "core/lowrank/projection.h"
 
+#include "core/common/avx2_clones.h"
 #include "core/common/error.h"
 #include "core/lowrank/tiles.h"
 
@@ -56,6 +57,29 @@ void project_coefficients(const BandView& in, const Eigen::MatrixXd& temporal_n,
     });
 }
 
+namespace {
+
+// Rows [row0, row0 + count) of every frame of `out`, `sum` their scratch.
+MODESTACK_AVX2_CLONES void rebuild_tile(const BandView& coefficients, const Eigen::MatrixXd& temporal_n,
+                                        const MutableBandView& out, std::int64_t row0, std::int64_t count,
+                                        double* sum)
+{
+    for (int t = 0; t < out.frames; ++t) {
+        std::fill(sum, sum + count, 0.0);
+        for (int j = 0; j < coefficients.frames; ++j) {
+            const double weight = temporal_n(t, j);
+            const float* c = coefficients.data + j * coefficients.frame_stride + row0;
+            for (std::int64_t i = 0; i < count; ++i)
+                sum[i] += static_cast<double>(c[i]) * weight;
+        }
+        float* target = out.data + t * out.frame_stride + row0;
+        for (std::int64_t i = 0; i < count; ++i)
+            target[i] = static_cast<float>(sum[i]);
+    }
+}
+
+}  // namespace
+
 void rebuild_from_coefficients(const BandView& coefficients, const Eigen::MatrixXd& temporal_n,
                                MutableBandView out)
 {
@@ -68,18 +92,7 @@ void rebuild_from_coefficients(const BandView& coefficients, const Eigen::Matrix
     // a farm write task rebuilding one frame gets the bits of a whole run.
     for_each_tile(coefficients.rows, [&](std::int64_t row0, std::int64_t count) {
         std::vector<double> sum(static_cast<std::size_t>(count));
-        for (int t = 0; t < out.frames; ++t) {
-            std::fill(sum.begin(), sum.end(), 0.0);
-            for (int j = 0; j < coefficients.frames; ++j) {
-                const double weight = temporal_n(t, j);
-                const float* c = coefficients.data + j * coefficients.frame_stride + row0;
-                for (std::int64_t i = 0; i < count; ++i)
-                    sum[static_cast<std::size_t>(i)] += static_cast<double>(c[i]) * weight;
-            }
-            float* target = out.data + t * out.frame_stride + row0;
-            for (std::int64_t i = 0; i < count; ++i)
-                target[i] = static_cast<float>(sum[static_cast<std::size_t>(i)]);
-        }
+        rebuild_tile(coefficients, temporal_n, out, row0, count, sum.data());
     });
 }
 

@@ -1,5 +1,6 @@
 #include "core/lowrank/tiles.h"
 
+#include "core/common/avx2_clones.h"
 #include "core/common/error.h"
 #include "core/common/progress.h"
 
@@ -21,7 +22,7 @@ std::int64_t tile_count(std::int64_t rows)
     return (rows + kTileRows - 1) / kTileRows;
 }
 
-void copy_tile(const BandView& band, std::int64_t row0, std::int64_t count, Eigen::MatrixXd& tile)
+MODESTACK_AVX2_CLONES void copy_tile(const BandView& band, std::int64_t row0, std::int64_t count, Eigen::MatrixXd& tile)
 {
     tile.resize(count, band.frames);
     for (int f = 0; f < band.frames; ++f) {

@@ -1,0 +1,13 @@
+// MODESTACK_AVX2_CLONES before a function with hot vectorised loops compiles it
+// twice, for AVX2 and for the x86-64 baseline, and the program picks the copy when
+// it loads (function multiversioning, an ifunc): 4 doubles or 8 floats a step
+// where the CPU has them, without building for one CPU. "avx2" enables no FMA, so
+// both copies make the same IEEE operations in the same order and give the same
+// bits: runs on different machines of a farm agree.
+#pragma once
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define MODESTACK_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define MODESTACK_AVX2_CLONES
+#endif
