@@ -42,9 +42,12 @@ std::int64_t input_bytes_per_row(const ShotShape& shape)
 std::int64_t pass_two_bytes(const ShotShape& shape, const PassNeeds& needs, int band_rows, bool sigma_apart)
 {
     const std::int64_t frames = shape.frames;
-    const std::int64_t images = frames * (band_rows + 2 * needs.sigma_halo_rows) +
-                                static_cast<std::int64_t>(needs.halo_images) * (band_rows + 2 * needs.halo_rows) +
-                                (needs.band_images + kSigmaScratchImages + (sigma_apart ? frames : 0)) * band_rows;
+    const std::int64_t halo_band_rows = band_rows + 2 * needs.halo_rows;
+    const std::int64_t pass_two_only = frames * (band_rows + 2 * needs.sigma_halo_rows) +
+                                       (needs.band_images + kSigmaScratchImages + (sigma_apart ? frames : 0)) * band_rows;
+    const std::int64_t survey_only = static_cast<std::int64_t>(needs.survey_images) * halo_band_rows;
+    const std::int64_t images =
+        static_cast<std::int64_t>(needs.halo_images) * halo_band_rows + std::max(pass_two_only, survey_only);
     return images * samples_per_row(shape) * static_cast<std::int64_t>(sizeof(float));
 }
 

@@ -28,6 +28,10 @@ struct PassNeeds {
     int sigma_halo_rows = 0;  ///< of those, the rows sigma's residual needs rebuilt for every frame
     int halo_images = 0;      ///< images over the band with its halo (coefficients, the filter's guide)
     int band_images = 0;      ///< images over the band's own rows (filtered modes, gains, workers' scratch)
+    /// Images over the band with its halo that only the mode filter's survey holds
+    /// (its [pixel][mode] copy of the coefficients). The survey ends before pass 2's
+    /// own buffers exist, so a band needs the larger of the two, not their sum.
+    int survey_images = 0;
     std::int64_t source_row_bytes = 0;  ///< what the source keeps per row of a streamed band
 };
 
@@ -49,7 +53,8 @@ std::int64_t input_bytes_per_row(const ShotShape& shape);
 /// Bytes pass 2 holds for a band of `band_rows` rows, its input aside: the
 /// unfiltered rebuild of every frame over the band and sigma's halo, sigma's
 /// scratch, the images of `needs` and, when `sigma_apart`, each frame's sigma of
-/// the band's rows (a streamed band keeps sigma in its own input rows instead).
+/// the band's rows (a streamed band keeps sigma in its own input rows instead);
+/// or, when larger, what the survey holds in their place (PassNeeds::survey_images).
 std::int64_t pass_two_bytes(const ShotShape& shape, const PassNeeds& needs, int band_rows, bool sigma_apart);
 
 }  // namespace modestack::denoise

@@ -74,13 +74,14 @@ public:
                 m_report.feature_guide = m_features->summary();
             }
             needs.halo_rows = std::max(needs.halo_rows, mode_filter_halo(m_filter_options));
-            // Over the halo: the surveyed coefficients twice (as projected and the
-            // survey's [pixel][mode] copy), the guide with its noise (a few images)
-            // and the feature rows twice (as read and the guide's planar copy).
-            // Over the band: the filtered coefficients, their gains and one frame's
-            // kept noise per worker.
+            // Over the halo: the surveyed coefficients, the guide with its noise (a
+            // few images) and the feature rows twice (as read and the guide's planar
+            // copy); the survey alone also holds its [pixel][mode] copy. Over the
+            // band: the filtered coefficients, their gains and one frame's kept
+            // noise per worker.
             const int surveyed = std::max(m_settings.mode_filter.max_modes, largest_rank);
-            needs.halo_images = 2 * surveyed + kGuideImages +
+            needs.survey_images = surveyed;
+            needs.halo_images = surveyed + kGuideImages +
                                 2 * ((m_filter_options.feature_channels + m_shape.channels - 1) / m_shape.channels);
             needs.band_images = 2 * surveyed + tbb::this_task_arena::max_concurrency();
         }

@@ -122,3 +122,22 @@ TEST_CASE("band plan: a budget below one band is a usage error naming what a ban
     CHECK(plan.in_memory);
     CHECK(plan.band_rows == 5);
 }
+
+TEST_CASE("band plan: the survey's own images count only where they exceed pass 2's, never on top of them")
+{
+    const PassNeeds needs = filter_needs();
+    const std::int64_t image_row = static_cast<std::int64_t>(kShape.width) * kShape.channels * 4;
+    const std::int64_t halo_band = 32 + 2 * needs.halo_rows;
+    // 16 survey images over 54 rows: far below 100 frames over sigma's 40 rows.
+    PassNeeds small = needs;
+    small.survey_images = 16;
+    CHECK(pass_two_bytes(kShape, small, 32, false) == pass_two_bytes(kShape, needs, 32, false));
+    // A short shot: its survey copy is the larger, and then it alone is counted.
+    const ShotShape few{6, 1920, 1080, 3};
+    PassNeeds large = needs;
+    large.survey_images = 40;
+    const std::int64_t without = pass_two_bytes(few, needs, 32, false);
+    const std::int64_t with = pass_two_bytes(few, large, 32, false);
+    const std::int64_t pass_two_only = without - needs.halo_images * halo_band * image_row;
+    CHECK(with - without == 40 * halo_band * image_row - pass_two_only);
+}
