@@ -4,9 +4,20 @@
 // where the CPU has them, without building for one CPU. "avx2" enables no FMA, so
 // both copies make the same IEEE operations in the same order and give the same
 // bits: runs on different machines of a farm agree.
+// Not under ThreadSanitizer: the clones' ifunc resolver runs while the program is
+// being relocated, before TSan's runtime is up, and crashes there.
 #pragma once
 
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#if defined(__has_feature)
+#if __has_feature(thread_sanitizer)
+#define MODESTACK_THREAD_SANITIZER 1
+#endif
+#endif
+#if defined(__SANITIZE_THREAD__)
+#define MODESTACK_THREAD_SANITIZER 1
+#endif
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__)) && !defined(MODESTACK_THREAD_SANITIZER)
 #define MODESTACK_AVX2_CLONES __attribute__((target_clones("avx2", "default")))
 #else
 #define MODESTACK_AVX2_CLONES
