@@ -298,7 +298,8 @@ Subcommand add_compare_command(CLI::App& parent)
         ->required();
     command->add_option("--layer", options->layers,
                         "Layer to compare: NAME.R/G/B or <prefix>.NAME.<ch> (Cycles DiffInd); repeatable. "
-                        "Default: the only RGB layer");
+                        "Default: the only RGB layer")
+        ->allow_extra_args(false);  // one value per --layer, so that `--layer DiffInd a b` works
     command->add_option("--frames", options->frames, "Only these frames: 1-48, 1001-1100, 1-100x2, 1,3,7-9");
     command
         ->add_option("--fail", options->thresholds.fail,

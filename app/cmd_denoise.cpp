@@ -545,7 +545,8 @@ Subcommand add_denoise_command(CLI::App& parent)
         ->required();
     command->add_option("--layer", options->layers,
                         "Layer to denoise: NAME.R/G/B or <prefix>.NAME.<ch> (Cycles DiffInd); repeatable. "
-                        "Default: the only RGB layer");
+                        "Default: the only RGB layer")
+        ->allow_extra_args(false);  // one value per --layer, so that `--layer DiffInd in.####.exr` works
     command->add_option("--rank", options->rank, "Number of modes N, or auto to let --rank-rule choose");
     command->add_option("--rank-rule", options->rank_rule,
                         "How auto chooses N with --no-mode-filter: press (cross-validation), variance (the seed's "
@@ -586,6 +587,7 @@ Subcommand add_denoise_command(CLI::App& parent)
     command->add_option("--mode-filter-widths", options->mode_filter_widths,
                         "Gaussian widths (pixels) the mode filter tries, comma-separated; no filter is always tried")
         ->delimiter(',')
+        ->allow_extra_args(false)
         ->check(CLI::Range(0.1, 16.0));
     command->add_option("--rank-map", options->rank_map,
                         "Let the number of modes vary per pixel (fractional: blends N and N + 1) by the local "
@@ -595,7 +597,8 @@ Subcommand add_denoise_command(CLI::App& parent)
                         "Features that may guide the mode filter's edges: auto (default: those the input has: "
                         "DiffCol/Denoising Albedo, Normal, Depth next to the layer), none, or a list of albedo, "
                         "normal, depth; SURE decides per mode whether they help")
-        ->delimiter(',');
+        ->delimiter(',')
+        ->allow_extra_args(false);
     command->add_flag("--skip-existing", options->skip_existing,
                       "Do not rewrite output frames that exist already (farm re-runs)");
     command->add_option("--colorspace", options->colorspace,

@@ -295,6 +295,9 @@ TEST_CASE(
     auto same = run_modestack("compare " + dir.file("ref.####.exr") + " " + dir.file("ref.####.exr") +
                               " --layer ViewLayer.DiffInd --layer Depth -q");
     CHECK(same.exit_code == 0);
+    // Options before the sequences, as with idiff and oiiotool: each --layer takes one value.
+    auto options_first = run_modestack("compare --layer DiffInd --fail 0.05 " + pair + " -q");
+    CHECK_MESSAGE(options_first.exit_code == 1, options_first.err);
     auto ambiguous = run_modestack("compare " + pair);
     CHECK(ambiguous.exit_code == 4);
     CHECK(one_line(ambiguous.err));

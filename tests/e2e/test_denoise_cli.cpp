@@ -147,6 +147,14 @@ TEST_CASE("denoise removes most of the noise, writes sigma, keeps other channels
     CHECK(testkit::read_string_attribute(first, "renderer") == "synthetic");
     CHECK(testkit::read_string_attribute(first, "modestack:rank_rule") == "sure");
     CHECK(testkit::read_string_attribute(first, "modestack:command").find("denoise") != std::string::npos);
+
+    // Options before the sequence, as with oiiotool: --layer and the comma lists take one value each,
+    // so the sequence stays the positional (here with the default widths and guides spelt out).
+    auto options_first = run_modestack("denoise --layer DiffInd --mode-filter-widths 0.75,1,1.5,2,3 "
+                                       "--mode-filter-guides auto " +
+                                       dir.file("in.####.exr") + " -o " + dir.file("first/den.####.exr") + " -q");
+    REQUIRE_MESSAGE(options_first.exit_code == 0, options_first.err);
+    CHECK(testkit::read_channels(dir.file("first/den.0001.exr"), kDiffInd) == testkit::read_channels(first, kDiffInd));
 }
 
 TEST_CASE("denoise --no-mode-filter: press picks the true rank 2 and sigma matches a rank-2 rebuild's noise")
