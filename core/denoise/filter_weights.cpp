@@ -181,8 +181,7 @@ const std::vector<float>& WeightWindow::guided_factor(ExponentScales scales)
                 float feature = 0;
                 for (int k = 0; k < m_guide.feature_channels; ++k) {
                     const float* plane = m_guide.feature_plane(k);
-                    const float difference = plane[centre] - plane[other];
-                    feature += difference * difference;
+                    feature += feature_term(plane[centre], plane[other]);
                 }
                 m_range_distance[index] = range, m_feature_distance[index] = feature;
             }
@@ -197,12 +196,9 @@ const std::vector<float>& WeightWindow::guided_factor(ExponentScales scales)
     if (!factor->current) {
         factor->values.resize(taps);
         for (std::size_t i = 0; i < taps; ++i) {
-            float exponent = 0;  // only the terms the candidate has: 0 · ∞ would be NaN
-            if (scales.range != 0)
-                exponent += scales.range * m_range_distance[i];
-            if (scales.feature != 0)
-                exponent += scales.feature * m_feature_distance[i];
-            factor->values[i] = weight_exp(exponent);
+            const float range = scales.range != 0 ? m_range_distance[i] : 0.0f;
+            const float feature = scales.feature != 0 ? m_feature_distance[i] : 0.0f;
+            factor->values[i] = weight_exp(guided_exponent(scales, range, feature));
         }
         factor->current = true;
     }

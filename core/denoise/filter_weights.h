@@ -91,12 +91,27 @@ inline float range_term(float centre, float other, float centre_noise, float oth
     return difference * difference / (centre_noise + other_noise + 1e-30f);
 }
 
+/// A feature difference's contribution to D_feature: its square.
+inline float feature_term(float centre, float other)
+{
+    const float difference = centre - other;
+    return difference * difference;
+}
+
 /// The exponent scales of a candidate: ρ_r = −1 / (2 ρ² C) and ρ_f = −1 / (2 ρ_f² K),
 /// 0 where the candidate (or the guide) has no such term.
 struct ExponentScales {
     float range = 0, feature = 0;
 };
 ExponentScales exponent_scales(const FilterCandidate& candidate, const Guide& guide);
+
+/// ρ_r · D_range + ρ_f · D_feature, the guided factor's exponent. A term the
+/// scales lack must come in as 0: 0 · ∞ would be NaN (a range term is ∞ where the
+/// guide's noise is 0).
+inline float guided_exponent(ExponentScales scales, float range, float feature)
+{
+    return scales.range * range + scales.feature * feature;
+}
 
 /// Weights of one candidate filter around a pixel, clipped to the band: the
 /// survey's per-pixel windows. The guided factor exp(ρ_r D_r + ρ_f D_f) does not

@@ -100,10 +100,8 @@ MODESTACK_AVX2_CLONES void filter_row(const Filter& filter, int y, int valid_y0,
                 std::fill(feature + x_begin, feature + x_end, 0.0f);
                 for (int k = 0; k < guide.feature_channels; ++k) {
                     const float* plane = guide.feature_plane(k);
-                    for (int x = x_begin; x < x_end; ++x) {
-                        const float difference = plane[centre_row + x] - plane[other_row + x];
-                        feature[x] += difference * difference;
-                    }
+                    for (int x = x_begin; x < x_end; ++x)
+                        feature[x] += feature_term(plane[centre_row + x], plane[other_row + x]);
                 }
             }
             for (std::size_t n = 0; n < kernels.size(); ++n) {
@@ -111,17 +109,16 @@ MODESTACK_AVX2_CLONES void filter_row(const Filter& filter, int y, int valid_y0,
                 if (std::abs(dx) > kernel.radius || std::abs(dy) > kernel.radius)
                     continue;
                 const float spatial = kernel.spatial[static_cast<std::size_t>(dx * dx + dy * dy)];
-                const float range_scale = kernel.scales.range, feature_scale = kernel.scales.feature;
                 float* const weight = row.weight.data();
                 float* const sum = row.sum[n].data();
                 float* const squares = row.squares[n].data();
-                // A term the kernel lacks reads zeros (0 · ∞ would be NaN), which
-                // adds exactly 0, as the survey's window that skips it.
-                const float* const range_in = range_scale != 0 ? range : row.zeros.data();
-                const float* const feature_in = feature_scale != 0 ? feature : row.zeros.data();
+                // A term the kernel lacks reads zeros (guided_exponent), as in the
+                // survey's window.
+                const ExponentScales scales = kernel.scales;
+                const float* const range_in = scales.range != 0 ? range : row.zeros.data();
+                const float* const feature_in = scales.feature != 0 ? feature : row.zeros.data();
                 for (int x = x_begin; x < x_end; ++x) {
-                    const float exponent = range_scale * range_in[x] + feature_scale * feature_in[x];
-                    const float w = spatial * weight_exp(exponent);
+                    const float w = spatial * weight_exp(guided_exponent(scales, range_in[x], feature_in[x]));
                     weight[x] = w;
                     sum[x] += w;
                     squares[x] += w * w;

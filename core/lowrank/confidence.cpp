@@ -105,8 +105,9 @@ MODESTACK_AVX2_CLONES void inner_window_mean(const double* column_sum, double* w
 
 // Writes the mean over the (2·radius+1)² window (clipped at the band) of
 // sample(y, k) for the output rows of frame t into `out`'s frame t.
-MODESTACK_AVX2_CLONES void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, int valid_y0, int valid_y1,
-                   float* out_frame, std::vector<double>& column_sum, std::vector<double>& window_sum)
+MODESTACK_AVX2_CLONES void windowed_mean(const Rows& sample, const ImageBandShape& shape, int radius, int valid_y0,
+                                         int valid_y1, float* out_frame, std::vector<double>& column_sum,
+                                         std::vector<double>& window_sum)
 {
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
     for (int y = valid_y0; y < valid_y1; ++y) {
