@@ -472,10 +472,9 @@ int run_denoise(const DenoiseOptions& options)
     TransformStream transformed(transform, collector ? collector->source() : stream.source(),
                                 collector ? collector->sink() : stream.sink(), settings, options.input,
                                 options.method_options);
-    if (staged)
-        settings.stage = &staged->task();
     denoise::Report report =
-        run_segmented(segments, transformed.source(), transformed.sink(), settings, context.progress());
+        staged ? staged->run(transformed.source(), transformed.sink(), settings, context.progress())
+               : run_segmented(segments, transformed.source(), transformed.sink(), settings, context.progress());
     sink.commit();
     if (staged)
         staged->finish(options.output);

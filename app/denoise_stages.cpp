@@ -115,11 +115,12 @@ void add_stage_options(CLI::App& command, StageOptions& options)
     command.add_option("--modes", options.modes, "--stage write: every modes file of the shot, once");
 }
 
-StageRun::StageRun(const StageOptions& options, const CLI::App& command) : m_options(options), m_command(command)
+StageRun::StageRun(const StageOptions& options, const CLI::App& command)
+    : m_options(options), m_command(command), m_stage(parse_stage(options.stage))
 {
-    m_task.stage = parse_stage(options.stage);
-    const std::string name = denoise::stage_name(m_task.stage);
-    const denoise::Stage stage = m_task.stage;
+    const std::string name = denoise::stage_name(m_stage);
+    const denoise::Stage stage = m_stage;
+    const StageFilesInMemory* in_memory = options.in_memory.get();
     const bool by_rows = stage == denoise::Stage::Statistics || stage == denoise::Stage::Survey ||
                          stage == denoise::Stage::Modes;
     const bool after_solve = stage == denoise::Stage::Survey || stage == denoise::Stage::Modes ||
@@ -133,17 +134,17 @@ StageRun::StageRun(const StageOptions& options, const CLI::App& command) : m_opt
         throw usage_error(fmt::format("--solve belongs to --stage survey, modes or write, not --stage {}", name));
     if (!options.survey.empty() && !after_survey)
         throw usage_error(fmt::format("--survey belongs to --stage modes or write, not --stage {}", name));
-    if (!options.modes.empty() && m_task.stage != denoise::Stage::Write)
+    if (!options.modes.empty() && stage != denoise::Stage::Write)
         throw usage_error(fmt::format("--modes belongs to --stage write, not --stage {}", name));
     if (by_rows && options.rows.empty())
         throw usage_error(fmt::format("--stage {} needs --rows Y0-Y1 or --rows I/K", name));
-    if (m_task.stage == denoise::Stage::Solve && options.stats.empty() && !options.stats_bytes)
+    if (stage == denoise::Stage::Solve && options.stats.empty() && !in_memory)
         throw usage_error("--stage solve needs the statistics files of the shot: --stats FILE...");
-    if (after_solve && options.solve.empty() && !options.solve_bytes)
+    if (after_solve && options.solve.empty() && !in_memory)
         throw usage_error(fmt::format("--stage {} needs the solve task's file: --solve FILE", name));
-    if (after_survey && options.survey.empty() && !options.survey_bytes)
+    if (after_survey && options.survey.empty() && !in_memory)
         throw usage_error(fmt::format("--stage {} needs the survey files of the shot: --survey FILE...", name));
-    if (m_task.stage == denoise::Stage::Write && options.modes.empty() && !options.modes_bytes)
+    if (stage == denoise::Stage::Write && options.modes.empty() && !in_memory)
         throw usage_error("--stage write needs the modes files of the shot: --modes FILE...");
     for (const char* option : {"--report", "--save-modes", "--rank-map", "--segments", "--train-frames"})
         if (command.count(option) > 0)
@@ -152,27 +153,26 @@ StageRun::StageRun(const StageOptions& options, const CLI::App& command) : m_opt
         command.get_option("--non-negative-mode")->as<std::string>() == "keep-sum")
         throw usage_error("--stage cannot be combined with --non-negative-mode keep-sum: it needs every frame of a "
                           "pixel at once (use clamp, or run on one machine)");
-    if (options.stats_bytes)
-        m_statistics = *options.stats_bytes;
+    if (in_memory) {
+        m_statistics_files = in_memory->stats;
+        if (in_memory->solve)
+            m_solve_file = *in_memory->solve;
+        m_survey_files = in_memory->survey;
+        m_modes_bytes = std::move(m_options.in_memory->modes);
+    }
     for (const std::string& path : options.stats)
-        m_statistics.push_back(read_stage_bytes(path));
-    if (options.solve_bytes)
-        m_solve = *options.solve_bytes;
-    else if (!options.solve.empty())
-        m_solve = read_stage_bytes(options.solve);
-    if (options.survey_bytes)
-        m_surveys = *options.survey_bytes;
+        m_statistics_files.push_back(io::read_stage_bytes(path));
+    if (!options.solve.empty())
+        m_solve_file = io::read_stage_bytes(options.solve);
     for (const std::string& path : options.survey)
-        m_surveys.push_back(read_stage_bytes(path));
-    if (options.modes_bytes)
-        m_modes = std::move(*options.modes_bytes);
+        m_survey_files.push_back(io::read_stage_bytes(path));
     for (const std::string& path : options.modes)
-        m_modes.push_back(read_stage_bytes(path));
+        m_modes_bytes.push_back(io::read_stage_bytes(path));
 }
 
 std::string StageRun::shot_frames(const std::string& frames_option) const
 {
-    return writes_frames() ? shot_frames_of_solve_file(m_solve) : frames_option;
+    return writes_frames() ? io::shot_frames_of_solve_file(m_solve_file) : frames_option;
 }
 
 void StageRun::keep_written_frames(const std::string& frames_option, const std::vector<int>& shot,
@@ -188,7 +188,7 @@ void StageRun::keep_written_frames(const std::string& frames_option, const std::
             auto at = std::find(shot.begin(), shot.end(), frame);
             if (at == shot.end())
                 throw usage_error(fmt::format("--frames {}: frame {} is not in the shot of {} ({})", frames_option,
-                                              frame, m_solve.name, io::describe_frames(shot)));
+                                              frame, m_solve_file.name, io::describe_frames(shot)));
             written[static_cast<size_t>(at - shot.begin())] = true;
         }
     }
@@ -201,31 +201,63 @@ void StageRun::prepare(const io::FrameSequence& input, const io::SequenceReader&
 {
     m_fingerprint = {shot_json(input, reader), method_options_given(m_command)};
     const int height = reader.height(), frames = static_cast<int>(input.frames.size());
-    switch (m_task.stage) {
+    switch (m_stage) {
     case denoise::Stage::Survey:
     case denoise::Stage::Modes:  // any rows: their sums and images do not depend on the bands
-        std::tie(m_task.row_begin, m_task.row_end) = parse_rows(m_options.rows, height, 1);
-        // Checked here too, before any input is read (the engine checks again).
-        denoise::check_task_rows(m_task.row_begin, m_task.row_end, height);
-        read_solve(m_solve, m_fingerprint, m_task);
-        if (m_task.stage == denoise::Stage::Modes)
-            read_surveys(m_surveys, m_solve, m_fingerprint, height, m_task);
+        std::tie(m_row_begin, m_row_end) = parse_rows(m_options.rows, height, 1);
+        // Checked here too, before any input is read (the task checks again).
+        denoise::check_task_rows(m_row_begin, m_row_end, height);
+        m_solved = io::read_solve(m_solve_file, m_fingerprint);
+        if (m_stage == denoise::Stage::Modes)
+            m_shot_survey = io::read_surveys(m_survey_files, m_solve_file, m_fingerprint, height);
         break;
     case denoise::Stage::Statistics:
-        std::tie(m_task.row_begin, m_task.row_end) = parse_rows(m_options.rows, height, denoise::kStageBlockRows);
-        denoise::check_statistics_rows(m_task.row_begin, m_task.row_end, height);
+        std::tie(m_row_begin, m_row_end) = parse_rows(m_options.rows, height, denoise::kStageBlockRows);
+        denoise::check_statistics_rows(m_row_begin, m_row_end, height);
         break;
     case denoise::Stage::Solve:
-        read_statistics(m_statistics, m_fingerprint, height, frames, m_task);
+        m_shot_statistics = io::read_statistics(m_statistics_files, m_fingerprint, height, frames);
         break;
-    case denoise::Stage::Write:
-        read_solve(m_solve, m_fingerprint, m_task);
-        read_surveys(m_surveys, m_solve, m_fingerprint, height, m_task);
-        read_modes(m_modes, m_solve, survey_digest(m_task.survey_rows), m_fingerprint, reader.width(), height,
-                   reader.selected_channel_count(), m_task);
-        for (StageBytes& input : m_modes)  // parsed into the task: only the names stay, for the JSON
-            std::string().swap(input.bytes);
+    case denoise::Stage::Write: {
+        m_solved = io::read_solve(m_solve_file, m_fingerprint);
+        m_shot_survey = io::read_surveys(m_survey_files, m_solve_file, m_fingerprint, height);
+        m_bands = io::read_modes(m_modes_bytes, m_solve_file, io::survey_digest(m_shot_survey.sums), m_fingerprint,
+                                 reader.width(), height, reader.selected_channel_count());
+        // Parsed into the bands: only the names stay, for the JSON.
+        for (const io::StageBytes& file : m_modes_bytes)
+            m_modes_files.push_back(file.name);
+        std::vector<io::StageBytes>().swap(m_modes_bytes);
         break;
+    }
+    }
+}
+
+denoise::Report StageRun::run(denoise::FrameSource& source, denoise::FrameSink& sink,
+                              const denoise::Settings& settings, Progress& progress)
+{
+    const denoise::PassContext context{source, sink, settings, progress};
+    switch (m_stage) {
+    case denoise::Stage::Statistics: {
+        auto result = denoise::statistics_task(context, m_row_begin, m_row_end);
+        m_output = io::statistics_bytes(m_fingerprint, result.output);
+        return result.report;
+    }
+    case denoise::Stage::Solve: {
+        auto result = denoise::solve_task(context, m_shot_statistics);
+        m_output = io::solve_bytes(m_fingerprint, result.output);
+        return result.report;
+    }
+    case denoise::Stage::Survey: {
+        auto result = denoise::survey_task(context, m_solved, m_row_begin, m_row_end);
+        m_output = io::survey_bytes(m_fingerprint, m_solve_file, result.output);
+        return result.report;
+    }
+    case denoise::Stage::Modes: {
+        auto result = denoise::modes_task(context, m_solved, m_shot_survey, m_row_begin, m_row_end);
+        m_output = io::modes_bytes(m_fingerprint, m_solve_file, io::survey_digest(m_shot_survey.sums), result.output);
+        return result.report;
+    }
+    default: return denoise::write_task(context, m_solved, m_shot_survey, m_bands);
     }
 }
 
@@ -233,36 +265,28 @@ void StageRun::finish(const std::string& output_path) const
 {
     if (writes_frames())
         return;
-    std::string bytes;
-    switch (m_task.stage) {
-    case denoise::Stage::Statistics: bytes = statistics_bytes(m_fingerprint, m_task); break;
-    case denoise::Stage::Solve: bytes = solve_bytes(m_fingerprint, m_task); break;
-    case denoise::Stage::Survey: bytes = survey_bytes(m_fingerprint, m_solve, m_task); break;
-    default: bytes = modes_bytes(m_fingerprint, m_solve, survey_digest(m_task.survey_rows), m_task); break;
-    }
-    if (m_options.output_bytes)
-        *m_options.output_bytes = std::move(bytes);
+    if (m_options.in_memory)
+        m_options.in_memory->output = m_output;
     else
-        io::write_text_file(output_path, bytes);
+        io::write_text_file(output_path, m_output);
 }
 
 nlohmann::ordered_json StageRun::json() const
 {
-    nlohmann::ordered_json json{{"stage", denoise::stage_name(m_task.stage)}};
-    if (m_task.stage == denoise::Stage::Statistics || m_task.stage == denoise::Stage::Survey ||
-        m_task.stage == denoise::Stage::Modes)
-        json["rows"] = {m_task.row_begin, m_task.row_end - 1};
-    if (m_task.stage == denoise::Stage::Solve)
-        for (const StageBytes& input : m_statistics)
+    nlohmann::ordered_json json{{"stage", denoise::stage_name(m_stage)}};
+    if (m_stage == denoise::Stage::Statistics || m_stage == denoise::Stage::Survey || m_stage == denoise::Stage::Modes)
+        json["rows"] = {m_row_begin, m_row_end - 1};
+    if (m_stage == denoise::Stage::Solve)
+        for (const io::StageBytes& input : m_statistics_files)
             json["statistics_files"].push_back(input.name);
-    if (m_task.stage != denoise::Stage::Statistics && m_task.stage != denoise::Stage::Solve)
-        json["solve_file"] = m_solve.name;
-    if (m_task.stage == denoise::Stage::Modes || m_task.stage == denoise::Stage::Write)
-        for (const StageBytes& input : m_surveys)
+    if (m_stage != denoise::Stage::Statistics && m_stage != denoise::Stage::Solve)
+        json["solve_file"] = m_solve_file.name;
+    if (m_stage == denoise::Stage::Modes || m_stage == denoise::Stage::Write)
+        for (const io::StageBytes& input : m_survey_files)
             json["survey_files"].push_back(input.name);
-    if (m_task.stage == denoise::Stage::Write)
-        for (const StageBytes& input : m_modes)
-            json["modes_files"].push_back(input.name);
+    if (m_stage == denoise::Stage::Write)
+        for (const std::string& name : m_modes_files)
+            json["modes_files"].push_back(name);
     return json;
 }
 

@@ -29,7 +29,7 @@ public:
     int size() const { return m_size; }
 
     /// At rank 0: every rank's `mine`, in rank order (empty elsewhere).
-    std::vector<StageBytes> gather(const std::string& mine) const
+    std::vector<io::StageBytes> gather(const std::string& mine) const
     {
         int length = static_cast<int>(mine.size());
         std::vector<int> lengths(m_size), offsets;
@@ -39,11 +39,11 @@ public:
             all.resize(offsets_of(lengths, "the ranks' statistics exceed 2 GB: use fewer ranks", offsets));
         MPI_Gatherv(mine.data(), length, MPI_BYTE, all.data(), lengths.data(), offsets.data(), MPI_BYTE, 0,
                     MPI_COMM_WORLD);
-        return m_rank == 0 ? split(all, lengths, offsets, "statistics") : std::vector<StageBytes>{};
+        return m_rank == 0 ? split(all, lengths, offsets, "statistics") : std::vector<io::StageBytes>{};
     }
 
     /// Every rank's `mine` at every rank, in rank order (`what` names them in errors).
-    std::vector<StageBytes> all_gather(const std::string& mine, const std::string& what) const
+    std::vector<io::StageBytes> all_gather(const std::string& mine, const std::string& what) const
     {
         int length = static_cast<int>(mine.size());
         std::vector<int> lengths(m_size), offsets;
@@ -94,10 +94,10 @@ private:
     }
 
     // Each rank's non-empty part of a gathered buffer, named "the <what> of rank r".
-    static std::vector<StageBytes> split(const std::string& all, const std::vector<int>& lengths,
+    static std::vector<io::StageBytes> split(const std::string& all, const std::vector<int>& lengths,
                                          const std::vector<int>& offsets, const std::string& what)
     {
-        std::vector<StageBytes> parts;
+        std::vector<io::StageBytes> parts;
         for (std::size_t r = 0; r < lengths.size(); ++r)
             if (lengths[r] > 0)
                 parts.push_back({fmt::format("the {} of rank {}", what, r), all.substr(offsets[r], lengths[r])});
@@ -124,52 +124,46 @@ int run_mpi_denoise(const std::string& frames, const RunStage& run_stage)
     const bool lead = mpi.rank() == 0;
     const std::string share = fmt::format("{}/{}", mpi.rank() + 1, mpi.size());
     try {
-        StageOptions stats;
-        stats.stage = "stats";
-        stats.rows = share;
-        std::string statistics;
-        stats.output_bytes = &statistics;
+        // Each stage's task gets its input files and leaves its output in memory.
+        const auto stage_of = [&](const char* name, const std::string& rows) {
+            StageOptions options;
+            options.stage = name;
+            options.rows = rows;
+            options.in_memory = std::make_shared<StageFilesInMemory>();
+            return options;
+        };
+        StageOptions stats = stage_of("stats", share);
         if (int code = run_stage(stats, frames, lead); code != 0)
             mpi.abort("the statistics stage failed", code);
-        const std::vector<StageBytes> gathered = mpi.gather(statistics);
+        const std::vector<io::StageBytes> gathered = mpi.gather(stats.in_memory->output);
 
         std::string solved;
         if (lead) {
-            StageOptions solve;
-            solve.stage = "solve";
-            solve.stats_bytes = &gathered;
-            solve.output_bytes = &solved;
+            StageOptions solve = stage_of("solve", "");
+            solve.in_memory->stats = gathered;
             if (int code = run_stage(solve, frames, false); code != 0)
                 mpi.abort("the solve stage failed", code);
+            solved = std::move(solve.in_memory->output);
         }
-        const StageBytes solve_file{"the solve of rank 0", mpi.broadcast(std::move(solved))};
+        const io::StageBytes solve_file{"the solve of rank 0", mpi.broadcast(std::move(solved))};
 
-        StageOptions survey;
-        survey.stage = "survey";
-        survey.rows = share;
-        survey.solve_bytes = &solve_file;
-        std::string survey_sums;
-        survey.output_bytes = &survey_sums;
+        StageOptions survey = stage_of("survey", share);
+        survey.in_memory->solve = solve_file;
         if (int code = run_stage(survey, frames, lead); code != 0)
             mpi.abort("the survey stage failed", code);
-        const std::vector<StageBytes> all_surveys = mpi.all_gather(survey_sums, "survey");
+        const std::vector<io::StageBytes> all_surveys = mpi.all_gather(survey.in_memory->output, "survey");
 
-        StageOptions modes;
-        modes.stage = "modes";
-        modes.rows = share;
-        modes.solve_bytes = &solve_file;
-        modes.survey_bytes = &all_surveys;
-        std::string mode_images;
-        modes.output_bytes = &mode_images;
+        StageOptions modes = stage_of("modes", share);
+        modes.in_memory->solve = solve_file;
+        modes.in_memory->survey = all_surveys;
         if (int code = run_stage(modes, frames, lead); code != 0)
             mpi.abort("the modes stage failed", code);
-        std::vector<StageBytes> all_modes = mpi.all_gather(mode_images, "modes");
+        std::vector<io::StageBytes> all_modes = mpi.all_gather(modes.in_memory->output, "modes");
 
-        StageOptions write;
-        write.stage = "write";
-        write.solve_bytes = &solve_file;
-        write.survey_bytes = &all_surveys;
-        write.modes_bytes = &all_modes;
+        StageOptions write = stage_of("write", "");
+        write.in_memory->solve = solve_file;
+        write.in_memory->survey = all_surveys;
+        write.in_memory->modes = std::move(all_modes);
         return run_stage(write, share, lead);
     } catch (const Error& error) {
         mpi.abort(error.what(), exit_code(error.kind()));

@@ -21,9 +21,10 @@ namespace modestack::app {
 /// OMPI_COMM_WORLD_SIZE, other launchers PMI_SIZE).
 bool started_by_mpirun();
 
-/// One stage of the job: `stage` (its stage, rows and in-memory files filled
-/// in), `frames` the --frames to use, `lead` whether this rank reports
-/// (progress, summary line, --json). Returns the exit code.
+/// One stage of the job: `stage` (its stage, rows and StageFilesInMemory: the
+/// input files it is handed, and where it leaves its output), `frames` the
+/// --frames to use, `lead` whether this rank reports (progress, summary line,
+/// --json). Returns the exit code.
 using RunStage = std::function<int(const StageOptions& stage, const std::string& frames, bool lead)>;
 
 /// Runs the job's five stages on this rank; `frames` is the command's --frames.

@@ -17,7 +17,6 @@ target_sources(modestack PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/memory_budget.cpp
   ${CMAKE_CURRENT_LIST_DIR}/method_options.cpp
   ${CMAKE_CURRENT_LIST_DIR}/denoise_stages.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/stage_files.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mpi_job.cpp
   ${CMAKE_CURRENT_LIST_DIR}/option_values.cpp
   ${CMAKE_CURRENT_LIST_DIR}/object_space.cpp

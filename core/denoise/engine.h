@@ -1,14 +1,17 @@
-// The temporal low-rank denoiser as a stream (DESIGN.md, "The denoiser as a
-// stream"): pass 1 reads bands of every frame, cleans NaN/Inf and fireflies and
-// accumulates the Gram matrix XᵀX; the small eigenproblem (or the randomized SVD)
-// gives the temporal modes; a rank rule picks N; pass 2 reads the bands again
+// The temporal low-rank denoiser as a stream (docs/design.md, "The passes and
+// their data"): pass 1 reads bands of every frame, cleans NaN/Inf and fireflies
+// and accumulates the Gram matrix XᵀX; the small eigenproblem (or the randomized
+// SVD) gives the temporal modes; a rank rule picks N; pass 2 reads the bands again
 // (with halo rows), rebuilds every frame from the first N modes and estimates the
 // standard error of each rebuilt value. With the mode filter (mode_filter.h) a
 // survey pass between them chooses each mode's spatial filter by SURE (and N for
 // auto rank), and pass 2 filters the coefficient images before the rebuild and
-// tells sigma how much noise each filtered sample keeps. When the shot fits the memory budget it
-// is read once and kept. Results are bit-identical for any thread count and for
-// streaming versus in-memory runs.
+// tells sigma how much noise each filtered sample keeps. When the shot fits the
+// memory budget it is read once and kept. Results are bit-identical for any
+// thread count and for streaming versus in-memory runs.
+//
+// This header holds the settings, the report and the whole run; the passes
+// themselves are in passes.h, a farm's share of them in farm_tasks.h.
 #pragma once
 
 #include "core/common/progress.h"
@@ -18,7 +21,6 @@
 #include "core/denoise/mode_filter.h"
 #include "core/denoise/non_negative.h"
 #include "core/denoise/rank_map.h"
-#include "core/denoise/stage_task.h"
 #include "core/denoise/weight_smoothing.h"
 #include "core/lowrank/outliers.h"
 #include "core/lowrank/randomized_svd.h"
@@ -79,9 +81,6 @@ struct Settings {
     /// --report: also report pt(t, j) for j < max(2N, report_modes), capped at F − 1
     /// and at the modes found (Report::preview_temporal_modes, the rank slider); 0: none.
     int report_modes = 0;
-    /// A farm task's share of the run (stage_task.h): its inputs are read and its
-    /// outputs written here; null: the whole run. Gram solver, no --train-frames.
-    StageTask* stage = nullptr;
 };
 
 /// What a run did and found, for the JSON summary and the report.
@@ -109,8 +108,9 @@ struct Report {
     double seconds_rebuild = 0;     ///< pass 2 (read + rebuild + sigma + write)
 };
 
-/// Denoises `source` into `sink` (with Settings::stage, does that task's share). Throws modestack::Error on bad settings
-/// (fewer than 3 frames, rank out of range, memory too small) and cancellation.
+/// Denoises `source` into `sink`: every pass of passes.h in order. Throws
+/// modestack::Error on bad settings (fewer than 3 frames, N out of range, memory
+/// too small) and cancellation.
 Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& settings, Progress& progress);
 
 }  // namespace modestack::denoise

@@ -135,7 +135,7 @@ public:
 
     /// The sums of image rows [row_begin, row_end) as add_band left them (empty for
     /// rows not added), and their restoration, for a survey split over farm tasks
-    /// (app/stage_files.h): finish() then gives the same plan as one survey.
+    /// (io/stage_files.h): finish() then gives the same plan as one survey.
     std::vector<std::vector<double>> row_sums(int row_begin, int row_end) const;
     /// Throws modestack::Error (internal) when a row's length does not match this survey.
     void restore_row_sums(int row_begin, std::vector<std::vector<double>> sums);

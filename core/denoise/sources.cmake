@@ -25,3 +25,11 @@ set_source_files_properties(
   ${CMAKE_CURRENT_LIST_DIR}/filter_weights.cpp
   ${CMAKE_CURRENT_LIST_DIR}/guided_filter.cpp
   PROPERTIES COMPILE_OPTIONS -fno-trapping-math)
+target_sources(modestack_core PRIVATE
+  ${CMAKE_CURRENT_LIST_DIR}/band_rebuild.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/farm_tasks.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/rebuild_pass.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/run_plan.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/shot_stream.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/statistics_pass.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/survey_pass.cpp)

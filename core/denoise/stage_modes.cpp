@@ -18,7 +18,7 @@ void place_images(const std::vector<float>& band, int modes, std::int64_t band_s
 
 }  // namespace
 
-ShotModes join_modes_bands(const std::vector<ModesBand>& bands, const ShotShape& shape, int residual_modes,
+ShotModes join_modes_bands(const std::vector<ModeImages>& bands, const ShotShape& shape, int residual_modes,
                            int output_modes, int gain_modes)
 {
     const std::int64_t row_samples = static_cast<std::int64_t>(shape.width) * shape.channels;
@@ -33,7 +33,7 @@ ShotModes join_modes_bands(const std::vector<ModesBand>& bands, const ShotShape&
     shot.gains.resize(static_cast<size_t>(pixels) * gain_modes);
     shot.patches.resize(static_cast<size_t>(shape.frames));
     int covered = 0;
-    for (const ModesBand& band : bands) {
+    for (const ModeImages& band : bands) {
         const std::int64_t band_samples = row_samples * (band.row_end - band.row_begin);
         const std::int64_t band_pixels = band_samples / shape.channels;
         if (band.row_begin != covered || band.row_end <= band.row_begin || band.row_end > shape.height ||
@@ -48,7 +48,7 @@ ShotModes join_modes_bands(const std::vector<ModesBand>& bands, const ShotShape&
         place_images(band.output, output_modes, band_samples, shot.output, samples, first);
         place_images(band.noise_variance, 1, band_samples, shot.noise_variance, samples, first);
         place_images(band.gains, gain_modes, band_pixels, shot.gains, pixels, first / shape.channels);
-        for (const ModesBand::Patch& patch : band.patches) {
+        for (const ModeImages::Patch& patch : band.patches) {
             if (patch.frame < 0 || patch.frame >= shape.frames || patch.sample < 0 || patch.sample >= band_samples)
                 throw internal_error("a modes band's patch lies outside it");
             shot.patches[static_cast<size_t>(patch.frame)].push_back({patch.frame, first + patch.sample, patch.value});

@@ -10,7 +10,7 @@
 
 namespace modestack::denoise {
 
-/// ModesBand's arrays for the whole image (samples [y][x][channel] from row 0).
+/// ModeImages's arrays for the whole image (samples [y][x][channel] from row 0).
 struct ShotModes {
     int residual_modes = 0;
     int output_modes = 0;
@@ -19,12 +19,12 @@ struct ShotModes {
     std::vector<float> output;
     std::vector<float> noise_variance;
     std::vector<float> gains;
-    std::vector<std::vector<ModesBand::Patch>> patches;  ///< per frame, samples counted from row 0
+    std::vector<std::vector<ModeImages::Patch>> patches;  ///< per frame, samples counted from row 0
 };
 
-/// Joins `bands` (row order, every row of `shape` once, as app/stage_files.h
+/// Joins `bands` (row order, every row of `shape` once, as io/stage_files.h
 /// checks) made with the given mode counts; throws an internal error otherwise.
-ShotModes join_modes_bands(const std::vector<ModesBand>& bands, const ShotShape& shape, int residual_modes,
+ShotModes join_modes_bands(const std::vector<ModeImages>& bands, const ShotShape& shape, int residual_modes,
                            int output_modes, int gain_modes);
 
 }  // namespace modestack::denoise

@@ -15,15 +15,15 @@
 //               that differ from the files (NaN/Inf, fireflies);
 //   Write:      what Solve and Survey found and every band's modes → the outputs of the
 //               frames the task owns, reading only those frames.
-// The task holds the inputs and receives the outputs; app/stage_files.h moves
-// them between machines. Settings::stage null is a whole run.
+// farm_tasks.h runs each task on its typed inputs and returns its typed result;
+// io/stage_files.h moves them between machines as files.
 #pragma once
 
 #include "core/lowrank/gram.h"
 #include "core/lowrank/outliers.h"
 
 #include <cstdint>
-#include <optional>
+#include <vector>
 #include <vector>
 
 namespace modestack::denoise {
@@ -49,11 +49,11 @@ void check_statistics_rows(int row_begin, int row_end, int height);
 /// `height` rows: what a survey or modes task may cover.
 void check_task_rows(int row_begin, int row_end, int height);
 
-/// A modes task's result for rows [row_begin, row_end) of the shot: everything a
+/// A modes task's result (the mode images) for rows [row_begin, row_end) of the shot: everything a
 /// write task needs of those rows besides the frames it writes. Samples are
 /// [row][x][channel] from the band's first row; images of several modes follow
 /// each other.
-struct ModesBand {
+struct ModeImages {
     int row_begin = 0;
     int row_end = 0;
     int residual_modes = 0;  ///< N: unfiltered coefficients, for sigma's residual
@@ -72,24 +72,28 @@ struct ModesBand {
     std::vector<Patch> patches;  ///< in frame order, then sample order
 };
 
-struct StageTask {
-    Stage stage = Stage::Statistics;
-    /// Statistics: rows [row_begin, row_end) (row_begin a multiple of kStageBlockRows); Survey, Modes: any rows.
+/// Pass 1 over rows [row_begin, row_end): the Gram sums of each block of
+/// kStageBlockRows rows, in row order, and what cleaning found. A statistics
+/// task's result; the solve's input is every block of the shot.
+struct Statistics {
     int row_begin = 0;
     int row_end = 0;
-    /// Statistics output: the sums of each block of its rows, in row order. Solve
-    /// input: every block of the shot, in row order.
-    std::vector<lowrank::GramAccumulator> gram_blocks;
-    /// Solve output, Survey, Modes and Write input: the blocks merged in row order.
-    std::optional<lowrank::GramAccumulator> gram;
-    /// Statistics output, Solve and Write input: what pass 1 cleaned.
+    std::vector<lowrank::GramAccumulator> blocks;
     lowrank::OutlierCounts outliers;
-    /// Survey output: the mode filter's survey sums of its rows (SureSurvey::row_sums).
-    /// Modes and Write input: those of every row (empty without the mode filter).
-    std::vector<std::vector<double>> survey_rows;
-    /// Modes: rows [row_begin, row_end) (any rows). Modes output: its one band.
-    /// Write input: every band of the shot, in row order, each row once.
-    std::vector<ModesBand> modes;
+};
+
+/// The solve task's result: every block merged in row order, and the shot's outlier counts.
+struct SolvedSums {
+    lowrank::GramAccumulator gram{1};
+    lowrank::OutlierCounts outliers;
+};
+
+/// A survey task's result: the mode filter's survey sums of image rows
+/// [row_begin, row_end) (SureSurvey::row_sums). Later tasks take every row's.
+struct SurveyRows {
+    int row_begin = 0;
+    int row_end = 0;
+    std::vector<std::vector<double>> sums;
 };
 
 }  // namespace modestack::denoise

@@ -45,7 +45,7 @@ public:
     /// Number of frames F.
     int frames() const { return static_cast<int>(m_gram.rows()); }
 
-    /// Everything the accumulator holds, for the farm's stage files (app/stage_files.h).
+    /// Everything the accumulator holds, for the farm's stage files (io/stage_files.h).
     /// The matrices are exactly symmetric, so their lower triangles carry them.
     struct State {
         Eigen::MatrixXd gram;

@@ -1,10 +1,11 @@
-// The farm stages of the engine (stage_task.h): statistics tasks over bands of
+// The farm tasks of the engine (farm_tasks.h): statistics tasks over bands of
 // rows, a solve task, survey and modes tasks over other bands of rows and write tasks over
 // some frames each give the same bits as one whole run, with and without the
 // mode filter, whitening and shrinkage, kept and streamed; bad row ranges are
 // refused.
 #include "core/common/error.h"
 #include "core/denoise/engine.h"
+#include "core/denoise/farm_tasks.h"
 #include "core/denoise/whitening.h"
 #include "tests/denoise/memory_shot.h"
 
@@ -54,26 +55,22 @@ MemoryShot noisy_shot(bool variance)
     return shot;
 }
 
-StageTask task_of(Stage stage, int row_begin = 0, int row_end = 0)
-{
-    StageTask task;
-    task.stage = stage;
-    task.row_begin = row_begin;
-    task.row_end = row_end;
-    return task;
-}
-
 struct Result {
     Report report;
     MemorySink sink;
 };
 
-Result run(MemoryShot& shot, Settings settings, StageTask* task)
+Result run(MemoryShot& shot, const Settings& settings)
 {
-    settings.stage = task;
     Result result{{}, MemorySink(shot.size)};
     result.report = run_denoise(shot, result.sink, settings, Progress::silent());
     return result;
+}
+
+// A task's context over `shot`, its outputs going to `sink`.
+PassContext context_of(MemoryShot& shot, MemorySink& sink, const Settings& settings)
+{
+    return {shot, sink, settings, Progress::silent()};
 }
 
 // A source that counts the frames read, to check that a write task reads only its own.
@@ -93,58 +90,50 @@ struct CountingSource : ForwardingSource {
 Result run_staged(MemoryShot& shot, const Settings& settings, const std::vector<std::pair<int, int>>& bands,
                   const std::vector<std::pair<int, int>>& mode_bands = {{0, 37}, {37, 150}})
 {
-    StageTask solve = task_of(Stage::Solve);
-    for (auto [begin, end] : bands) {
-        StageTask stats = task_of(Stage::Statistics, begin, end);
-        run(shot, settings, &stats);
-        for (auto& block : stats.gram_blocks)
-            solve.gram_blocks.push_back(std::move(block));
-        solve.outliers.non_finite += stats.outliers.non_finite;
-        solve.outliers.fireflies += stats.outliers.fireflies;
+    MemorySink unused(shot.size);
+    const PassContext context = context_of(shot, unused, settings);
+    // The statistics tasks' blocks, joined in row order as the solve file reader joins them.
+    std::vector<Statistics> tasks;
+    for (auto [begin, end] : bands)
+        tasks.push_back(statistics_task(context, begin, end).output);
+    std::sort(tasks.begin(), tasks.end(),
+              [](const Statistics& a, const Statistics& b) { return a.row_begin < b.row_begin; });
+    Statistics shot_statistics{0, shot.size.height, {}, {}};
+    for (Statistics& task : tasks) {
+        for (auto& block : task.blocks)
+            shot_statistics.blocks.push_back(std::move(block));
+        shot_statistics.outliers.non_finite += task.outliers.non_finite;
+        shot_statistics.outliers.fireflies += task.outliers.fireflies;
     }
-    Result solved = run(shot, settings, &solve);
-    for (const auto& frame : solved.sink.rebuilt)
+    const SolvedSums solved = solve_task(context, shot_statistics).output;
+    for (const auto& frame : unused.rebuilt)
         for (float value : frame)
-            REQUIRE(value == 0.0f);  // the solve task writes nothing
-    CHECK(solve.survey_rows.empty());  // the survey tasks' work
+            REQUIRE(value == 0.0f);  // no task before the write writes frames
     // Survey tasks over yet other bands, their row sums joined in row order.
-    std::vector<std::vector<double>> survey_rows;
+    SurveyRows survey{0, shot.size.height, {}};
     for (auto [begin, end] : {std::pair{0, 50}, std::pair{50, 150}}) {
-        StageTask task = task_of(Stage::Survey, begin, end);
-        task.gram = solve.gram;
-        task.outliers = solve.outliers;
-        run(shot, settings, &task);
-        CHECK(task.survey_rows.size() == (settings.mode_filter.enabled ? std::size_t(end - begin) : 0));
-        survey_rows.insert(survey_rows.end(), task.survey_rows.begin(), task.survey_rows.end());
+        const SurveyRows rows = survey_task(context, solved, begin, end).output;
+        CHECK(rows.sums.size() == (settings.mode_filter.enabled ? std::size_t(end - begin) : 0));
+        survey.sums.insert(survey.sums.end(), rows.sums.begin(), rows.sums.end());
     }
-    std::vector<ModesBand> modes;
+    std::vector<ModeImages> modes;
     for (auto [begin, end] : mode_bands) {
-        StageTask task = task_of(Stage::Modes, begin, end);
-        task.gram = solve.gram;
-        task.outliers = solve.outliers;
-        task.survey_rows = survey_rows;
-        Result result = run(shot, settings, &task);
-        REQUIRE(task.modes.size() == 1);
-        CHECK(task.modes.front().row_begin == begin);
-        modes.push_back(std::move(task.modes.front()));
+        modes.push_back(modes_task(context, solved, survey, begin, end).output);
+        CHECK(modes.back().row_begin == begin);
     }
+    for (const auto& frame : unused.rebuilt)
+        for (float value : frame)
+            REQUIRE(value == 0.0f);
     std::sort(modes.begin(), modes.end(),
-              [](const ModesBand& a, const ModesBand& b) { return a.row_begin < b.row_begin; });
+              [](const ModeImages& a, const ModeImages& b) { return a.row_begin < b.row_begin; });
     Result joined{{}, MemorySink(shot.size)};
     const int frames = shot.size.frames, half = frames / 2;
     for (auto [first, last] : {std::pair{0, half}, std::pair{half, frames}}) {
-        StageTask write = task_of(Stage::Write);
-        write.gram = solve.gram;
-        write.outliers = solve.outliers;
-        write.survey_rows = survey_rows;
-        write.modes = modes;
-        Settings task_settings = settings;
-        task_settings.stage = &write;
         MemorySink sink(shot.size);
         sink.written.assign(std::size_t(frames), false);
         std::fill(sink.written.begin() + first, sink.written.begin() + last, true);
         CountingSource source(shot);
-        joined.report = run_denoise(source, sink, task_settings, Progress::silent());
+        joined.report = write_task({source, sink, settings, Progress::silent()}, solved, survey, modes);
 
         for (int t = 0; t < frames; ++t) {
             CAPTURE(t);
@@ -161,7 +150,7 @@ Result run_staged(MemoryShot& shot, const Settings& settings, const std::vector<
 // Returns whether the whole run kept the shot in memory.
 bool check_same_bits(MemoryShot& shot, const Settings& settings)
 {
-    Result whole = run(shot, settings, nullptr);
+    Result whole = run(shot, settings);
     Result staged = run_staged(shot, settings, {{0, 64}, {64, 150}});
     Result three = run_staged(shot, settings, {{128, 150}, {0, 64}, {64, 128}});
     CHECK(whole.report.outliers.fireflies > 0);
@@ -221,22 +210,22 @@ TEST_CASE("stages: a statistics task must cover whole blocks of rows, a modes ta
 {
     MemoryShot shot = noisy_shot(false);
     Settings settings;
-    StageTask misaligned = task_of(Stage::Statistics, 10, 64);
-    CHECK_THROWS_WITH_AS(run(shot, settings, &misaligned), doctest::Contains("whole blocks of 64 rows"), Error);
-    StageTask short_end = task_of(Stage::Statistics, 0, 100);
-    CHECK_THROWS_WITH_AS(run(shot, settings, &short_end), doctest::Contains("whole blocks"), Error);
-    StageTask last = task_of(Stage::Statistics, 128, 150);
-    CHECK_NOTHROW(run(shot, settings, &last));
-    CHECK(last.gram_blocks.size() == 1);
-    StageTask outside = task_of(Stage::Modes, 100, 151);
-    outside.gram = lowrank::GramAccumulator(shot.size.frames);
-    CHECK_THROWS_WITH_AS(run(shot, settings, &outside), doctest::Contains("rows 0-149"), Error);
+    MemorySink sink(shot.size);
+    CHECK_THROWS_WITH_AS(statistics_task(context_of(shot, sink, settings), 10, 64),
+                         doctest::Contains("whole blocks of 64 rows"), Error);
+    CHECK_THROWS_WITH_AS(statistics_task(context_of(shot, sink, settings), 0, 100), doctest::Contains("whole blocks"),
+                         Error);
+    Statistics last;
+    CHECK_NOTHROW(last = statistics_task(context_of(shot, sink, settings), 128, 150).output);
+    CHECK(last.blocks.size() == 1);
+    const SolvedSums empty{lowrank::GramAccumulator(shot.size.frames), {}};
+    CHECK_THROWS_WITH_AS(modes_task(context_of(shot, sink, settings), empty, {}, 100, 151),
+                         doctest::Contains("rows 0-149"), Error);
     settings.non_negative = NonNegativeMode::KeepSum;
-    StageTask keep_sum = task_of(Stage::Write);
-    keep_sum.gram = lowrank::GramAccumulator(shot.size.frames);
-    CHECK_THROWS_WITH_AS(run(shot, settings, &keep_sum), doctest::Contains("keep-sum"), Error);
+    CHECK_THROWS_WITH_AS(write_task(context_of(shot, sink, settings), empty, {}, {}), doctest::Contains("keep-sum"),
+                         Error);
     settings.non_negative = NonNegativeMode::Off;
     settings.solver = Solver::RandomizedSvd;
-    StageTask stats = task_of(Stage::Statistics, 0, 64);
-    CHECK_THROWS_WITH_AS(run(shot, settings, &stats), doctest::Contains("--method rsvd"), Error);
+    CHECK_THROWS_WITH_AS(statistics_task(context_of(shot, sink, settings), 0, 64), doctest::Contains("--method rsvd"),
+                         Error);
 }

@@ -1,5 +1,6 @@
 // The files a farm denoise passes between its tasks (`denoise --stage`, issue 11;
-// core/denoise/stage_task.h): a statistics task's block sums, the solve task's
+// core/denoise/stage_task.h, farm_tasks.h): one reader and one writer per typed
+// result: a statistics task's block sums, the solve task's
 // merged sums, a survey task's mode-filter sums and a modes task's images of its rows.
 // Each file is one text line naming the format, one line of JSON (the stage,
 // the shot's fingerprint, sizes, counts) and the numbers as raw little-endian
@@ -21,7 +22,7 @@
 #include <string>
 #include <vector>
 
-namespace modestack::app {
+namespace modestack::io {
 
 /// What must agree between the files of one job.
 struct ShotFingerprint {
@@ -43,40 +44,41 @@ StageBytes read_stage_bytes(const std::string& path);
 /// "frames"): a write task denoises that shot and writes a part of it.
 std::string shot_frames_of_solve_file(const StageBytes& solve);
 
-/// A statistics task's output: rows [row_begin, row_end) of the shot.
-std::string statistics_bytes(const ShotFingerprint& fingerprint, const denoise::StageTask& task);
+/// A statistics task's output: its rows' block sums.
+std::string statistics_bytes(const ShotFingerprint& fingerprint, const denoise::Statistics& statistics);
 
 /// Checks the statistics files of a job against each other and against
-/// `fingerprint`: every block of a shot of `height` rows exactly once. Fills
-/// task.gram_blocks (row order) and task.outliers (their sums).
-void read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprint& fingerprint, int height,
-                     int frames, denoise::StageTask& task);
+/// `fingerprint`: every block of a shot of `height` rows exactly once. Returns
+/// the shot's statistics: every block in row order, the outlier counts summed.
+denoise::Statistics read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprint& fingerprint,
+                                    int height, int frames);
 
 /// The solve task's output.
-std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::StageTask& task);
+std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::SolvedSums& solved);
 
-/// Reads a solve file made for `fingerprint` into task.gram and task.outliers.
-void read_solve(const StageBytes& solve, const ShotFingerprint& fingerprint, denoise::StageTask& task);
+/// Reads a solve file made for `fingerprint`.
+denoise::SolvedSums read_solve(const StageBytes& solve, const ShotFingerprint& fingerprint);
 
-/// A survey task's output (task.survey_rows of its rows), tied to the solve file it used.
-std::string survey_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const denoise::StageTask& task);
+/// A survey task's output, tied to the solve file it used.
+std::string survey_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const denoise::SurveyRows& survey);
 
 /// Checks the survey files of a job: made for `fingerprint` from `solve`, every
-/// row of the shot once. Fills task.survey_rows (every row; empty without the mode filter).
-void read_surveys(const std::vector<StageBytes>& inputs, const StageBytes& solve, const ShotFingerprint& fingerprint,
-                  int height, denoise::StageTask& task);
+/// row of the shot once. Returns every row's sums (none without the mode filter).
+denoise::SurveyRows read_surveys(const std::vector<StageBytes>& inputs, const StageBytes& solve,
+                                 const ShotFingerprint& fingerprint, int height);
 
-/// Names the survey sums of every row (StageTask::survey_rows), whatever files held them.
+/// Names the survey sums of every row, whatever files held them.
 std::string survey_digest(const std::vector<std::vector<double>>& rows);
 
-/// A modes task's output (its one band in task.modes), tied to the solve file
-/// and the survey sums (survey_digest) it used.
+/// A modes task's output, tied to the solve file and the survey sums
+/// (survey_digest) it used.
 std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const std::string& surveys,
-                        const denoise::StageTask& task);
+                        const denoise::ModeImages& images);
 
 /// Checks the modes files of a job: made for `fingerprint` from `solve` and the
-/// surveys of digest `surveys`, every row of the shot once. Fills task.modes in row order.
-void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, const std::string& surveys,
-                const ShotFingerprint& fingerprint, int width, int height, int channels, denoise::StageTask& task);
+/// surveys of digest `surveys`, every row of the shot once. Returns them in row order.
+std::vector<denoise::ModeImages> read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve,
+                                            const std::string& surveys, const ShotFingerprint& fingerprint, int width,
+                                            int height, int channels);
 
-}  // namespace modestack::app
+}  // namespace modestack::io

@@ -1,4 +1,4 @@
-#include "app/stage_files.h"
+#include "io/stage_files.h"
 
 #include "core/common/error.h"
 
@@ -10,7 +10,7 @@
 #include <optional>
 #include <sstream>
 
-namespace modestack::app {
+namespace modestack::io {
 namespace {
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "stage files hold little-endian doubles");
@@ -295,16 +295,16 @@ std::string shot_frames_of_solve_file(const StageBytes& solve)
 
 StageBytes read_stage_bytes(const std::string& path) { return {path, read_whole_file(path)}; }
 
-std::string statistics_bytes(const ShotFingerprint& fingerprint, const denoise::StageTask& task)
+std::string statistics_bytes(const ShotFingerprint& fingerprint, const denoise::Statistics& statistics)
 {
-    const int frames = task.gram_blocks.empty() ? 0 : task.gram_blocks.front().frames();
+    const int frames = statistics.blocks.empty() ? 0 : statistics.blocks.front().frames();
     nlohmann::ordered_json header = header_for(denoise::Stage::Statistics, fingerprint, frames);
-    header["rows"] = {task.row_begin, task.row_end};
+    header["rows"] = {statistics.row_begin, statistics.row_end};
     header["block_rows"] = denoise::kStageBlockRows;
-    header["outliers"] = outliers_json(task.outliers);
+    header["outliers"] = outliers_json(statistics.outliers);
     nlohmann::ordered_json blocks = nlohmann::ordered_json::array();
     Payload payload;
-    for (const lowrank::GramAccumulator& block : task.gram_blocks) {
+    for (const lowrank::GramAccumulator& block : statistics.blocks) {
         const lowrank::GramAccumulator::State state = block.state();
         blocks.push_back({{"rows", state.rows}, {"tiles", state.tiles}});
         payload.add_gram(block);
@@ -313,8 +313,8 @@ std::string statistics_bytes(const ShotFingerprint& fingerprint, const denoise::
     return stage_bytes(header, payload);
 }
 
-void read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprint& fingerprint, int height,
-                     int frames, denoise::StageTask& task)
+denoise::Statistics read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprint& fingerprint,
+                                    int height, int frames)
 {
     if (inputs.empty())
         throw usage_error("--stage solve needs the statistics files of the job: --stats FILE...");
@@ -327,33 +327,33 @@ void read_statistics(const std::vector<StageBytes>& inputs, const ShotFingerprin
                    static_cast<int>(header.at("blocks").size()) == blocks &&
                    header.at("doubles").get<std::size_t>() == blocks * gram_doubles(frames);
         });
-    task.gram_blocks.clear();
-    task.outliers = {};
+    denoise::Statistics shot;
+    shot.row_begin = 0;
+    shot.row_end = height;
     for (const RowBand& band : bands) {
         const StageFile& file = files[band.file];
         PayloadReader payload = file.payload();
         for (const nlohmann::json& block : file.header.at("blocks"))
-            task.gram_blocks.push_back(
+            shot.blocks.push_back(
                 payload.gram(frames, block.at("rows").get<std::int64_t>(), block.at("tiles").get<std::int64_t>()));
-        task.outliers.non_finite += file.header.at("outliers").at("non_finite").get<std::int64_t>();
-        task.outliers.fireflies += file.header.at("outliers").at("fireflies").get<std::int64_t>();
+        shot.outliers.non_finite += file.header.at("outliers").at("non_finite").get<std::int64_t>();
+        shot.outliers.fireflies += file.header.at("outliers").at("fireflies").get<std::int64_t>();
     }
+    return shot;
 }
 
-std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::StageTask& task)
+std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::SolvedSums& solved)
 {
-    if (!task.gram)
-        throw internal_error("solve_bytes: the task has no merged sums");
-    const lowrank::GramAccumulator::State state = task.gram->state();
-    nlohmann::ordered_json header = header_for(denoise::Stage::Solve, fingerprint, task.gram->frames());
+    const lowrank::GramAccumulator::State state = solved.gram.state();
+    nlohmann::ordered_json header = header_for(denoise::Stage::Solve, fingerprint, solved.gram.frames());
     header["gram"] = {{"rows", state.rows}, {"tiles", state.tiles}};
-    header["outliers"] = outliers_json(task.outliers);
+    header["outliers"] = outliers_json(solved.outliers);
     Payload payload;
-    payload.add_gram(*task.gram);
+    payload.add_gram(solved.gram);
     return stage_bytes(header, payload);
 }
 
-void read_solve(const StageBytes& solve, const ShotFingerprint& fingerprint, denoise::StageTask& task)
+denoise::SolvedSums read_solve(const StageBytes& solve, const ShotFingerprint& fingerprint)
 {
     const std::string& path = solve.name;
     StageFile file = parse_stage_file(path, solve.bytes, denoise::Stage::Solve, fingerprint);
@@ -362,21 +362,20 @@ void read_solve(const StageBytes& solve, const ShotFingerprint& fingerprint, den
         if (frames < 1 || file.header.at("doubles").get<std::size_t>() != gram_doubles(frames))
             throw bad_input(path, "damaged solve file: its sizes do not agree");
         PayloadReader payload = file.payload();
-        task.gram = payload.gram(frames, file.header.at("gram").at("rows").get<std::int64_t>(),
-                                 file.header.at("gram").at("tiles").get<std::int64_t>());
-        task.outliers.non_finite = file.header.at("outliers").at("non_finite").get<std::int64_t>();
-        task.outliers.fireflies = file.header.at("outliers").at("fireflies").get<std::int64_t>();
+        denoise::SolvedSums solved;
+        solved.gram = payload.gram(frames, file.header.at("gram").at("rows").get<std::int64_t>(),
+                                   file.header.at("gram").at("tiles").get<std::int64_t>());
+        solved.outliers.non_finite = file.header.at("outliers").at("non_finite").get<std::int64_t>();
+        solved.outliers.fireflies = file.header.at("outliers").at("fireflies").get<std::int64_t>();
+        return solved;
     } catch (const nlohmann::json::exception& error) {
         throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));
     }
 }
 
 std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const std::string& surveys,
-                        const denoise::StageTask& task)
+                        const denoise::ModeImages& band)
 {
-    if (task.modes.size() != 1)
-        throw internal_error("modes_bytes: a modes task has one band");
-    const denoise::ModesBand& band = task.modes.front();
     nlohmann::ordered_json header = header_for(denoise::Stage::Modes, fingerprint, 0);
     header["solve"] = digest_of(solve.bytes);
     header["surveys"] = surveys;
@@ -386,7 +385,7 @@ std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& so
     header["gain_modes"] = band.gain_modes;
     header["patches"] = band.patches.size();
     Payload payload;
-    for (const denoise::ModesBand::Patch& patch : band.patches) {
+    for (const denoise::ModeImages::Patch& patch : band.patches) {
         payload.add(patch.frame);
         payload.add(static_cast<double>(patch.sample));
         payload.add(patch.value);
@@ -396,8 +395,9 @@ std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& so
     return stage_bytes(header, payload);
 }
 
-void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, const std::string& surveys,
-                const ShotFingerprint& fingerprint, int width, int height, int channels, denoise::StageTask& task)
+std::vector<denoise::ModeImages> read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve,
+                                            const std::string& surveys, const ShotFingerprint& fingerprint, int width,
+                                            int height, int channels)
 {
     if (inputs.empty())
         throw usage_error("--stage write needs the modes files of the shot: --modes FILE...");
@@ -413,10 +413,10 @@ void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, 
             return header.value("floats", std::size_t(0)) == floats &&
                    header.at("doubles").get<std::size_t>() == 3 * header.at("patches").get<std::size_t>();
         });
-    task.modes.clear();
+    std::vector<denoise::ModeImages> shot;
     for (const RowBand& row_band : bands) {
         const StageFile& file = files[row_band.file];
-        denoise::ModesBand band;
+        denoise::ModeImages band;
         band.row_begin = row_band.begin;
         band.row_end = row_band.end;
         band.residual_modes = file.header.at("residual_modes").get<int>();
@@ -425,7 +425,7 @@ void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, 
         const std::size_t samples = static_cast<std::size_t>(width) * channels * (band.row_end - band.row_begin);
         PayloadReader payload = file.payload();
         band.patches.resize(file.header.at("patches").get<std::size_t>());
-        for (denoise::ModesBand::Patch& patch : band.patches) {
+        for (denoise::ModeImages::Patch& patch : band.patches) {
             patch.frame = static_cast<int>(payload.next());
             patch.sample = static_cast<std::int64_t>(payload.next());
             patch.value = static_cast<float>(payload.next());
@@ -434,23 +434,24 @@ void read_modes(const std::vector<StageBytes>& inputs, const StageBytes& solve, 
         band.output = payload.floats(samples * band.output_modes);
         band.noise_variance = payload.floats(samples);
         band.gains = payload.floats(samples / channels * band.gain_modes);
-        if (!task.modes.empty() && (band.residual_modes != task.modes.front().residual_modes ||
-                                    band.output_modes != task.modes.front().output_modes ||
-                                    band.gain_modes != task.modes.front().gain_modes))
+        if (!shot.empty() && (band.residual_modes != shot.front().residual_modes ||
+                              band.output_modes != shot.front().output_modes ||
+                              band.gain_modes != shot.front().gain_modes))
             throw bad_input(file.path, "damaged modes file: its modes differ from the other files'");
-        task.modes.push_back(std::move(band));
+        shot.push_back(std::move(band));
     }
+    return shot;
 }
 
-std::string survey_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const denoise::StageTask& task)
+std::string survey_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const denoise::SurveyRows& survey)
 {
     nlohmann::ordered_json header = header_for(denoise::Stage::Survey, fingerprint, 0);
     header["solve"] = digest_of(solve.bytes);
-    header["rows"] = {task.row_begin, task.row_end};
-    const std::size_t length = task.survey_rows.empty() ? 0 : task.survey_rows.front().size();
+    header["rows"] = {survey.row_begin, survey.row_end};
+    const std::size_t length = survey.sums.empty() ? 0 : survey.sums.front().size();
     header["survey_row_length"] = length;
     Payload payload;
-    for (const std::vector<double>& row : task.survey_rows) {
+    for (const std::vector<double>& row : survey.sums) {
         if (row.size() != length)
             throw internal_error("survey_bytes: survey rows of different lengths");
         for (double value : row)
@@ -459,8 +460,8 @@ std::string survey_bytes(const ShotFingerprint& fingerprint, const StageBytes& s
     return stage_bytes(header, payload);
 }
 
-void read_surveys(const std::vector<StageBytes>& inputs, const StageBytes& solve, const ShotFingerprint& fingerprint,
-                  int height, denoise::StageTask& task)
+denoise::SurveyRows read_surveys(const std::vector<StageBytes>& inputs, const StageBytes& solve,
+                                 const ShotFingerprint& fingerprint, int height)
 {
     if (inputs.empty())
         throw usage_error("the modes and write stages need the survey files of the shot: --survey FILE...");
@@ -474,7 +475,9 @@ void read_surveys(const std::vector<StageBytes>& inputs, const StageBytes& solve
             const std::size_t rows = length == 0 ? 0 : static_cast<std::size_t>(end - begin);
             return header.at("doubles").get<std::size_t>() == rows * length && length == *first_length;
         });
-    task.survey_rows.clear();
+    denoise::SurveyRows shot;
+    shot.row_begin = 0;
+    shot.row_end = height;
     for (const RowBand& band : bands) {
         const StageFile& file = files[band.file];
         const std::size_t length = file.header.at("survey_row_length").get<std::size_t>();
@@ -485,9 +488,10 @@ void read_surveys(const std::vector<StageBytes>& inputs, const StageBytes& solve
             std::vector<double> sums(length);
             for (double& value : sums)
                 value = payload.next();
-            task.survey_rows.push_back(std::move(sums));
+            shot.sums.push_back(std::move(sums));
         }
     }
+    return shot;
 }
 
 std::string survey_digest(const std::vector<std::vector<double>>& rows)
@@ -498,4 +502,4 @@ std::string survey_digest(const std::vector<std::vector<double>>& rows)
     return digest_of(all);
 }
 
-}  // namespace modestack::app
+}  // namespace modestack::io

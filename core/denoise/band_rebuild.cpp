@@ -1,0 +1,152 @@
+#include "core/denoise/band_rebuild.h"
+
+#include "core/lowrank/projection.h"
+#include "core/lowrank/shrinkage.h"
+
+#include <algorithm>
+
+namespace modestack::denoise {
+
+RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& basis, int rank, int surveyed,
+                                const TrainingGram* training, double noise_sigma)
+{
+    RebuildBasis result;
+    result.rank = rank;
+    // --rank-map: pixels may use modes beyond N, up to those the filter surveyed.
+    result.rebuild_modes = settings.rank_map.enabled
+                               ? std::max(rank, std::min(rank + settings.rank_map.extra_modes, surveyed))
+                               : rank;
+    // With training frames the projection (A) and the rebuild (B) differ: training.h.
+    result.temporal =
+        training ? training->weights(basis, rank) : Eigen::MatrixXd(basis.temporal.leftCols(result.rebuild_modes));
+    const bool smooth = settings.weight_smoothing.enabled;  // --weight-smoothing: B smoothed, A kept
+    if (smooth)
+        result.temporal = smooth_temporal_weights(result.temporal, settings.weight_smoothing, result.weight_smoothing);
+    result.temporal_rank = result.temporal.leftCols(rank);
+    result.leverages =
+        training || smooth
+            ? training_leverages(training ? training->projector(basis, rank) : basis.temporal.leftCols(rank),
+                                 result.temporal_rank)
+            : lowrank::leverages(basis, rank);
+    if (settings.optimal_shrinkage)
+        result.shrinkage = lowrank::optimal_shrinkage_factors(basis, noise_sigma, rank);
+    result.projected = settings.mode_filter.enabled ? std::max(result.rebuild_modes, surveyed) : rank;
+    result.temporal_projected =
+        training ? training->projector(basis, result.projected) : basis.temporal.leftCols(result.projected);
+    result.output_modes = settings.mode_filter.enabled ? result.rebuild_modes : settings.optimal_shrinkage ? rank : 0;
+    return result;
+}
+
+BandRebuilder::BandRebuilder(const Settings& settings, const ShotShape& shape, const RebuildBasis& modes,
+                             const ModeFilterOptions& filter_options, const ModeFilterPlan& plan, int surveyed,
+                             const FeatureGuide* features)
+    : m_settings(settings), m_shape(shape), m_modes(modes), m_filter_options(filter_options), m_plan(plan),
+      m_surveyed(surveyed), m_features(features)
+{
+    m_confidence.radius = settings.sigma_radius;
+}
+
+std::pair<int, int> BandRebuilder::sigma_rows(const Band& data, int row, int end) const
+{
+    // Sigma's window reads radius + 1 rows around a pixel (see confidence.h).
+    const int halo = m_settings.sigma_radius + 1;
+    return {std::max(data.row_begin, row - halo), std::min(data.row_end, end + halo)};
+}
+
+const float* BandRebuilder::band_features(const Band& data, std::vector<float>& features) const
+{
+    if (m_filter_options.feature_channels == 0)
+        return nullptr;
+    m_features->read_rows(data.row_begin, data.row_end, features);
+    return features.data();
+}
+
+void BandRebuilder::prepare(const Band& data, int row, int end, const lowrank::MutableBandView* residual,
+                            std::vector<float>* ranks, float* means, std::int64_t means_stride)
+{
+    const int frames = m_shape.frames;
+    const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
+    const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
+    lowrank::BandView noisy = data.view(frames).view();
+    m_coefficients.resize(static_cast<size_t>(data.rows) * m_modes.projected);  // every value written below
+    lowrank::MutableBandView coefficient_view{m_coefficients.data(), data.rows, m_modes.projected, data.rows};
+    lowrank::project_coefficients(noisy, m_modes.temporal_projected, coefficient_view);
+    if (residual) {
+        for (int j = 0; j < m_modes.rank; ++j)
+            std::copy_n(m_coefficients.begin() + j * data.rows + offset, valid,
+                        residual->data + j * residual->frame_stride);
+    }
+    // Only the rows sigma's windows read are rebuilt unfiltered (the mode
+    // filter's wider halo needs coefficients only).
+    const auto [residual_begin, residual_end] = sigma_rows(data, row, end);
+    const std::int64_t residual_first = (residual_begin - data.row_begin) * row_samples;
+    const std::int64_t rebuilt_stride = (residual_end - residual_begin) * row_samples;
+    m_rebuilt.resize(static_cast<size_t>(rebuilt_stride) * frames);
+    lowrank::rebuild_from_coefficients(
+        {m_coefficients.data() + residual_first, rebuilt_stride, m_modes.rank, data.rows}, m_modes.temporal_rank,
+        {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride});
+    // The filter reads the noisy band, which the means may overwrite: it goes first.
+    if (m_settings.mode_filter.enabled)
+        filter(data, row, end, ranks);
+    lowrank::ImageBandShape shape{m_shape.width, residual_end - residual_begin, m_shape.channels};
+    m_noise_variance.resize(static_cast<size_t>(valid));
+    lowrank::residual_noise_variance({noisy.data + residual_first, rebuilt_stride, frames, noisy.frame_stride},
+                                     {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride}, shape, m_modes.rank,
+                                     row - residual_begin, end - residual_begin, m_confidence,
+                                     m_noise_variance.data(), means, means_stride);
+    for (size_t j = 0; j < m_modes.shrinkage.size(); ++j)  // --shrink optimal, the band's own rows
+        for (std::int64_t i = 0; i < valid; ++i)
+            m_coefficients[j * data.rows + offset + i] *= static_cast<float>(m_modes.shrinkage[j]);
+}
+
+// The mode filter's part of pass 2 for rows [row, end) of `data`: filters the
+// first rebuild_modes coefficient images in place (valid rows only) and leaves
+// in m_gains the noise each filtered mode keeps per valid pixel (gain_j(p)), from
+// which sigma's kept noise per frame follows (kept_noise_of_frame).
+// With --rank-map, `ranks` receives each valid pixel's rank and every filtered
+// mode is scaled by its blend weight at the pixel (rank_map.h).
+void BandRebuilder::filter(const Band& data, int row, int end, std::vector<float>* ranks)
+{
+    const int modes = m_modes.rebuild_modes;
+    const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
+    const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
+    lowrank::BandView noisy = data.view(m_shape.frames).view();
+    lowrank::BandView surveyed{m_coefficients.data(), data.rows, m_surveyed, data.rows};
+    lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
+    std::vector<float>& filtered = m_filtered;  // filter_coefficients writes every value
+    filtered.resize(static_cast<size_t>(valid) * modes);
+    std::vector<float> noise_variance, features;
+    coefficient_noise_variance(noisy, surveyed, shape, m_settings.mode_filter.noise_radius, noise_variance);
+    filter_coefficients(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin, m_plan, modes,
+                        {filtered.data(), valid, modes, valid}, m_gains, band_features(data, features));
+    const std::int64_t valid_pixels = valid / m_shape.channels;
+    if (ranks) {
+        std::vector<float> weights;
+        local_rank(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin, m_plan, m_modes.rank,
+                   modes, m_gains, m_settings.rank_map.radius, weights, *ranks);
+        for (int j = 0; j < modes; ++j)
+            for (std::int64_t i = 0; i < valid; ++i) {
+                const float weight = weights[static_cast<size_t>(j * valid_pixels + i / m_shape.channels)];
+                filtered[static_cast<size_t>(j * valid + i)] *= weight;
+                if (i % m_shape.channels == 0)  // the kept noise of a scaled mode: w² · gain
+                    m_gains[static_cast<size_t>(j * valid_pixels + i / m_shape.channels)] *= weight * weight;
+            }
+    }
+    for (int j = 0; j < modes; ++j)
+        std::copy(filtered.begin() + j * valid, filtered.begin() + (j + 1) * valid,
+                  m_coefficients.begin() + j * data.rows + offset);
+}
+
+void BandRebuilder::kept_noise_of_frame(const Eigen::MatrixXd& temporal, int t, int modes, const float* gains,
+                                        std::int64_t samples, float* kept) const
+{
+    const std::int64_t pixels = samples / m_shape.channels;
+    for (std::int64_t pixel = 0; pixel < pixels; ++pixel) {
+        double sum = 0;
+        for (int j = 0; j < modes; ++j)
+            sum += temporal(t, j) * temporal(t, j) * gains[static_cast<size_t>(j * pixels + pixel)];
+        std::fill_n(kept + pixel * m_shape.channels, m_shape.channels, static_cast<float>(sum));
+    }
+}
+
+}  // namespace modestack::denoise

@@ -1,0 +1,101 @@
+// Pass 2's arithmetic for one band, shared by a whole run's rebuild, a farm
+// modes task and (the temporal part) a farm write task, so that all three give
+// the same bits: the temporal matrices of the rebuild (RebuildBasis), and for a
+// band read with its halo the coefficient images (projected, then the valid
+// rows filtered and shrunk), the unfiltered rebuild of the rows sigma's windows
+// read, sigma's noise level s² and the mode filter's kept-noise gains.
+#pragma once
+
+#include "core/common/scratch_buffer.h"
+#include "core/denoise/engine.h"
+#include "core/denoise/shot_stream.h"
+#include "core/denoise/training.h"
+#include "core/lowrank/basis.h"
+#include "core/lowrank/confidence.h"
+
+#include <Eigen/Dense>
+
+#include <optional>
+#include <utility>
+#include <vector>
+
+namespace modestack::denoise {
+
+/// The temporal matrices of pass 2.
+struct RebuildBasis {
+    int rank = 0;           ///< N
+    int rebuild_modes = 0;  ///< modes the outputs are rebuilt from (more than N with --rank-map)
+    int projected = 0;      ///< modes projected on (the mode filter's noise estimate needs its survey's)
+    int output_modes = 0;   ///< modes the outputs are rebuilt from changed coefficients (0: the unfiltered N)
+    Eigen::MatrixXd temporal;            ///< F × rebuild_modes: the rebuild weights (B, smoothed)
+    Eigen::MatrixXd temporal_rank;       ///< F × N of them: the unfiltered rebuild sigma's residual uses
+    Eigen::MatrixXd temporal_projected;  ///< F × projected: the projection (A)
+    Eigen::VectorXd leverages;           ///< h_t for sigma
+    std::vector<double> shrinkage;       ///< --shrink optimal: η(σ_j)/σ_j per kept mode (empty: none)
+    WeightSmoothingPlan weight_smoothing;  ///< what --weight-smoothing did per kept mode
+};
+
+/// The matrices for N = `rank` modes of `basis`; `surveyed` modes the mode filter
+/// surveyed (0 without it), `training` the --train-frames sums (null: none),
+/// `noise_sigma` the rank rule's noise level (for --shrink optimal).
+RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& basis, int rank, int surveyed,
+                                const TrainingGram* training, double noise_sigma);
+
+/// Pass 2 up to the frames for one band at a time; its buffers are reused from
+/// band to band (fresh pages would cost the kernel's zeroing every band).
+class BandRebuilder {
+public:
+    /// `plan` the mode filter's choices (empty without it), `features` its guide (null: none).
+    BandRebuilder(const Settings& settings, const ShotShape& shape, const RebuildBasis& modes,
+                  const ModeFilterOptions& filter_options, const ModeFilterPlan& plan, int surveyed,
+                  const FeatureGuide* features);
+
+    /// For rows [row, end) of `data` (a band with its halo): the coefficients
+    /// (valid rows filtered and shrunk, halo rows as projected), the unfiltered
+    /// rebuild of the rows sigma's windows read (rebuilt()), s² and the kept-noise
+    /// gains of the valid rows. `residual` (optional; valid rows × N modes)
+    /// receives the valid rows' unfiltered coefficient images before the filter
+    /// changes them; `ranks` (optional, --rank-map) each valid pixel's rank;
+    /// `means` (optional; frame t's valid rows at means + t · means_stride) each
+    /// frame's windowed residual mean for sigma. `means` may be the valid rows
+    /// of `data` itself (a streamed band): nothing reads them afterwards.
+    void prepare(const Band& data, int row, int end, const lowrank::MutableBandView* residual,
+                 std::vector<float>* ranks, float* means = nullptr, std::int64_t means_stride = 0);
+
+    /// The image rows [begin, end) of `data` that sigma's windows read for rows [row, end).
+    std::pair<int, int> sigma_rows(const Band& data, int row, int end) const;
+    /// The noise each rebuilt sample of frame t keeps under the mode filter,
+    /// h_t(p) = Σ_j V_tj² · gain_j(p), for `samples` samples of the gains' pixels.
+    void kept_noise_of_frame(const Eigen::MatrixXd& temporal, int t, int modes, const float* gains,
+                             std::int64_t samples, float* kept) const;
+
+    const lowrank::ConfidenceOptions& confidence() const { return m_confidence; }
+    /// [mode][sample] of the last band with its halo.
+    ScratchBuffer<float>& coefficients() { return m_coefficients; }
+    /// [frame][sample] of sigma_rows(): the unfiltered rebuild, then (the caller's) output rows.
+    ScratchBuffer<float>& rebuilt() { return m_rebuilt; }
+    /// Sigma's s² of the last band's valid rows.
+    const std::vector<float>& noise_variance() const { return m_noise_variance; }
+    /// The mode filter's kept-noise gain per valid pixel and mode of the last band.
+    const std::vector<float>& gains() const { return m_gains; }
+
+private:
+    void filter(const Band& data, int row, int end, std::vector<float>* ranks);
+    const float* band_features(const Band& data, std::vector<float>& features) const;
+
+    const Settings& m_settings;
+    ShotShape m_shape;
+    const RebuildBasis& m_modes;
+    const ModeFilterOptions& m_filter_options;
+    const ModeFilterPlan& m_plan;
+    int m_surveyed;
+    const FeatureGuide* m_features;
+    lowrank::ConfidenceOptions m_confidence;
+    std::vector<float> m_filtered;        // the filter's output
+    ScratchBuffer<float> m_coefficients;  // [mode][sample] of the band with its halo
+    ScratchBuffer<float> m_rebuilt;       // [frame][sample] of sigma_rows()
+    std::vector<float> m_noise_variance;  // sigma's s² of the valid rows
+    std::vector<float> m_gains;           // kept-noise gain per valid pixel and mode
+};
+
+}  // namespace modestack::denoise

@@ -1,0 +1,269 @@
+#include "core/denoise/farm_tasks.h"
+
+#include "core/common/error.h"
+#include "core/denoise/block_gram.h"
+#include "core/denoise/stage_modes.h"
+#include "core/lowrank/confidence.h"
+#include "core/lowrank/projection.h"
+
+#include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <chrono>
+#include <mutex>
+
+namespace modestack::denoise {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// What no farm task can do (each needs the whole shot in one process).
+void check_task(const Settings& settings, Stage stage)
+{
+    const std::string name = stage_name(stage);
+    if (settings.solver == Solver::RandomizedSvd)
+        throw usage_error(fmt::format("--stage {}: the farm stages use the gram solver, not --method rsvd", name));
+    if (!settings.training_frames.empty())
+        throw usage_error(fmt::format("--stage {} cannot be combined with --train-frames", name));
+    if (stage != Stage::Statistics && stage != Stage::Solve && settings.non_negative == NonNegativeMode::KeepSum)
+        throw usage_error(fmt::format("--stage {} cannot be combined with --non-negative-mode keep-sum: it "
+                                      "needs every frame of a pixel; use clamp or run on one machine",
+                                      name));
+}
+
+// The checks, the plan and the first report fields of a task of `stage` over
+// rows [row_begin, row_end) (stats, survey and modes; the others ignore them).
+RunPlan plan_task(const PassContext& context, Stage stage, Report& report, int row_begin = 0, int row_end = 0)
+{
+    const ShotShape shape = context.source.shape();
+    check_settings(context.settings, shape);
+    check_task(context.settings, stage);
+    if (stage == Stage::Statistics)
+        check_statistics_rows(row_begin, row_end, shape.height);
+    if (stage == Stage::Survey || stage == Stage::Modes)
+        check_task_rows(row_begin, row_end, shape.height);
+    RunPlan plan = plan_run(context, stage != Stage::Statistics && stage != Stage::Solve);
+    plan.solver = Solver::Gram;
+    report.shape = context.source.shape();
+    report.plan = plan.bands;
+    report.solver = solver_name(plan.solver);
+    if (plan.features)
+        report.feature_guide = plan.features->summary();
+    return plan;
+}
+
+// The tasks after the solve: the modes from the merged sums, N, and (modes and
+// write) the survey's choice from every row's sums.
+struct Solved {
+    Solution solution;
+    Survey survey;
+};
+
+Solved solved_from(const PassContext& context, const RunPlan& plan, const SolvedSums& solved, const SurveyRows& survey,
+                   Report& report)
+{
+    const ShotShape shape = context.source.shape();
+    Solved result{solution_from_gram(context.settings, solved.gram), {}};
+    report.outliers = solved.outliers;
+    if (context.settings.mode_filter.enabled) {
+        if (static_cast<int>(survey.sums.size()) != shape.height)
+            throw internal_error("the modes and write stages need the mode filter's survey of every row");
+        result.survey = finish_survey(context.settings, shape, plan, result.solution, survey.sums);
+    } else {
+        result.survey = unfiltered_survey(result.solution);
+    }
+    report.rank = result.survey.rank;
+    report.mode_filter = result.survey.plan;
+    describe_solution(context.settings, shape, result.solution, report.rank.rank, report);
+    return result;
+}
+
+}  // namespace
+
+TaskResult<Statistics> statistics_task(const PassContext& context, int row_begin, int row_end)
+{
+    TaskResult<Statistics> result;
+    const RunPlan plan = plan_task(context, Stage::Statistics, result.report, row_begin, row_end);
+    const auto start = Clock::now();
+    ShotStream stream(context.source, context.settings.outliers, plan.bands, context.progress);
+    result.output = block_statistics(context, stream, row_begin, row_end);
+    result.report.passes = stream.passes();
+    result.report.outliers = stream.outliers();
+    result.report.seconds_statistics = seconds_since(start);
+    return result;
+}
+
+TaskResult<SolvedSums> solve_task(const PassContext& context, const Statistics& shot)
+{
+    TaskResult<SolvedSums> result;
+    plan_task(context, Stage::Solve, result.report);
+    if (static_cast<int>(shot.blocks.size()) != stage_blocks(result.report.shape.height))
+        throw internal_error("the solve stage needs every block's sums");
+    const auto start = Clock::now();
+    result.output.gram = BlockGram::merge(shot.blocks, result.report.shape.frames);
+    result.output.outliers = shot.outliers;
+    const Solution solution = solution_from_gram(context.settings, result.output.gram);
+    result.report.outliers = shot.outliers;
+    result.report.rank = solution.rank;
+    describe_solution(context.settings, result.report.shape, solution, solution.rank.rank, result.report);
+    result.report.seconds_solve = seconds_since(start);
+    return result;
+}
+
+TaskResult<SurveyRows> survey_task(const PassContext& context, const SolvedSums& solved, int row_begin, int row_end)
+{
+    TaskResult<SurveyRows> result;
+    const RunPlan plan = plan_task(context, Stage::Survey, result.report, row_begin, row_end);
+    const auto start = Clock::now();
+    const Solution solution = solution_from_gram(context.settings, solved.gram);
+    result.report.outliers = solved.outliers;
+    result.report.rank = solution.rank;
+    result.output.row_begin = row_begin;
+    result.output.row_end = row_end;
+    if (context.settings.mode_filter.enabled) {
+        const auto survey_start = Clock::now();
+        ShotStream stream(context.source, context.settings.outliers, plan.bands, context.progress);
+        result.output.sums = survey_rows(context, stream, plan, solution, row_begin, row_end, true);
+        result.report.passes = stream.passes();
+        result.report.seconds_filter_survey = seconds_since(survey_start);
+    } else {  // nothing to survey: the task reports the modes as the solve did
+        describe_solution(context.settings, result.report.shape, solution, solution.rank.rank, result.report);
+    }
+    result.report.seconds_solve = seconds_since(start) - result.report.seconds_filter_survey + solution.seconds;
+    return result;
+}
+
+TaskResult<ModeImages> modes_task(const PassContext& context, const SolvedSums& solved, const SurveyRows& survey,
+                                  int row_begin, int row_end)
+{
+    TaskResult<ModeImages> result;
+    Report& report = result.report;
+    const RunPlan plan = plan_task(context, Stage::Modes, report, row_begin, row_end);
+    const ShotShape& shape = report.shape;
+    const Solved modes_of = solved_from(context, plan, solved, survey, report);
+    const Settings& settings = context.settings;
+    const RebuildBasis modes = make_rebuild_basis(settings, modes_of.solution.basis, report.rank.rank,
+                                                  modes_of.survey.modes, nullptr, report.rank.noise_sigma);
+    report.shrinkage = modes.shrinkage;
+    report.weight_smoothing = modes.weight_smoothing;
+    const auto start = Clock::now();
+    BandRebuilder rebuilder(settings, shape, modes, plan.filter, modes_of.survey.plan, modes_of.survey.modes,
+                            plan.features ? &*plan.features : nullptr);
+    ShotStream stream(context.source, settings.outliers, plan.bands, context.progress);
+    const std::int64_t row_samples = stream.row_samples();
+    const std::int64_t samples = row_samples * (row_end - row_begin);
+    const std::int64_t pixels = samples / shape.channels;
+    ModeImages& images = result.output;
+    images.row_begin = row_begin;
+    images.row_end = row_end;
+    images.residual_modes = modes.rank;
+    images.output_modes = modes.output_modes;
+    images.gain_modes = settings.mode_filter.enabled ? modes.rebuild_modes : 0;
+    images.residual.resize(static_cast<size_t>(samples) * images.residual_modes);
+    images.output.resize(static_cast<size_t>(samples) * images.output_modes);
+    images.noise_variance.resize(static_cast<size_t>(samples));
+    images.gains.resize(static_cast<size_t>(pixels) * images.gain_modes);
+    stream.count_pass();
+    context.progress.begin(
+        fmt::format("modes of rows {}-{}: reading {} frames", row_begin, row_end - 1, shape.frames),
+        row_end - row_begin);
+    Band band;
+    for (int row = row_begin; row < row_end; row += plan.bands.band_rows) {
+        const int end = std::min(row_end, row + plan.bands.band_rows);
+        stream.record_patches(row, end, row_begin, &images.patches);
+        stream.read_task_band(band, row, end);
+        stream.record_patches(0, 0, 0, nullptr);
+        // The band's own rows go into the task's images, mode by mode.
+        const std::int64_t valid = (end - row) * row_samples, first = (row - row_begin) * row_samples;
+        const std::int64_t offset = (row - band.row_begin) * row_samples;
+        const lowrank::MutableBandView residual{images.residual.data() + first, valid, images.residual_modes,
+                                                samples};
+        rebuilder.prepare(band, row, end, &residual, nullptr);
+        for (int j = 0; j < images.output_modes; ++j)
+            std::copy_n(rebuilder.coefficients().begin() + j * band.rows + offset, valid,
+                        images.output.begin() + j * samples + first);
+        std::copy_n(rebuilder.noise_variance().begin(), valid, images.noise_variance.begin() + first);
+        const std::int64_t valid_pixels = valid / shape.channels, first_pixel = first / shape.channels;
+        for (int j = 0; j < images.gain_modes; ++j)
+            std::copy_n(rebuilder.gains().begin() + j * valid_pixels, valid_pixels,
+                        images.gains.begin() + j * pixels + first_pixel);
+        context.progress.advance(end - row);
+    }
+    context.progress.end();
+    report.passes = stream.passes();
+    report.seconds_rebuild = seconds_since(start);
+    return result;
+}
+
+// The outputs are rebuilt with the arithmetic of a whole run's pass 2, so the bits agree.
+Report write_task(const PassContext& context, const SolvedSums& solved, const SurveyRows& survey,
+                  const std::vector<ModeImages>& bands)
+{
+    Report report;
+    const RunPlan plan = plan_task(context, Stage::Write, report);
+    const ShotShape& shape = report.shape;
+    const Solved modes_of = solved_from(context, plan, solved, survey, report);
+    const Settings& settings = context.settings;
+    const RebuildBasis modes = make_rebuild_basis(settings, modes_of.solution.basis, report.rank.rank,
+                                                  modes_of.survey.modes, nullptr, report.rank.noise_sigma);
+    report.shrinkage = modes.shrinkage;
+    report.weight_smoothing = modes.weight_smoothing;
+    const auto start = Clock::now();
+    BandRebuilder rebuilder(settings, shape, modes, plan.filter, modes_of.survey.plan, modes_of.survey.modes, nullptr);
+    const ShotModes shot = join_modes_bands(bands, shape, modes.rank, modes.output_modes,
+                                            settings.mode_filter.enabled ? modes.rebuild_modes : 0);
+    std::vector<int> written;
+    for (int t = 0; t < shape.frames; ++t)
+        if (context.sink.writes_frame(t))
+            written.push_back(t);
+    const std::int64_t samples = static_cast<std::int64_t>(shape.width) * shape.height * shape.channels;
+    const lowrank::ImageBandShape image{shape.width, shape.height, shape.channels};
+    const Eigen::MatrixXd output_temporal = modes.temporal.leftCols(std::max(shot.output_modes, 1));
+    report.passes = 1;
+    context.sink.begin({modes.rank, report.rank.rule, report.solver});
+    context.progress.begin(fmt::format("writing {} of {} frames", written.size(), shape.frames),
+                           static_cast<std::int64_t>(written.size()));
+    struct Buffers {
+        std::vector<float> noisy, unfiltered, kept_noise, sigma, output;
+    };
+    tbb::enumerable_thread_specific<Buffers> thread_buffers;
+    std::mutex counts_mutex;
+    tbb::parallel_for(0, static_cast<int>(written.size()), [&](int k) {
+        throw_if_cancelled();
+        const int t = written[static_cast<size_t>(k)];
+        Buffers& buffers = thread_buffers.local();
+        for (std::vector<float>* buffer :
+             {&buffers.noisy, &buffers.unfiltered, &buffers.kept_noise, &buffers.sigma, &buffers.output})
+            buffer->resize(static_cast<size_t>(samples));
+        context.source.read_rows(t, 0, shape.height, buffers.noisy.data());
+        for (const ModeImages::Patch& patch : shot.patches[static_cast<size_t>(t)])
+            buffers.noisy[static_cast<size_t>(patch.sample)] = patch.value;
+        lowrank::rebuild_from_coefficients({shot.residual.data(), samples, shot.residual_modes, samples},
+                                           modes.temporal_rank.row(t), {buffers.unfiltered.data(), samples, 1, samples});
+        if (shot.gain_modes > 0)
+            rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
+                                          buffers.kept_noise.data());
+        lowrank::frame_sigma(buffers.noisy.data(), buffers.unfiltered.data(), image, 0, shape.height,
+                             rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
+                             shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, buffers.sigma.data());
+        std::vector<float>& output = shot.output_modes > 0 ? buffers.output : buffers.unfiltered;
+        if (shot.output_modes > 0)
+            lowrank::rebuild_from_coefficients({shot.output.data(), samples, shot.output_modes, samples},
+                                               output_temporal.row(t), {output.data(), samples, 1, samples});
+        const NonNegativeCounts counts =
+            make_non_negative({output.data(), samples, 1, samples}, settings.non_negative, settings.non_negative_floor);
+        {
+            std::lock_guard<std::mutex> lock(counts_mutex);
+            report.non_negative += counts;
+        }
+        context.sink.write_rows(t, 0, shape.height, output.data(), buffers.sigma.data());
+        context.progress.advance(1);
+    });
+    context.progress.end();
+    report.seconds_rebuild = seconds_since(start);
+    return report;
+}
+
+}  // namespace modestack::denoise

@@ -1,0 +1,99 @@
+#include "core/denoise/shot_stream.h"
+
+#include <fmt/format.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cstring>
+
+namespace modestack::denoise {
+
+ShotStream::ShotStream(FrameSource& source, const lowrank::OutlierOptions& outliers, const BandPlan& plan,
+                       Progress& progress)
+    : m_source(source), m_outlier_options(outliers), m_plan(plan), m_progress(progress), m_shape(source.shape())
+{
+}
+
+void ShotStream::begin_pass_progress()
+{
+    m_progress.begin(fmt::format("pass {}: reading {} frames", m_passes, m_shape.frames), m_shape.height);
+}
+
+void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning cleaning)
+{
+    throw_if_cancelled();
+    band.row_begin = row_begin;
+    band.row_end = row_end;
+    band.rows = row_samples() * (row_end - row_begin);
+    band.stride = band.rows;
+    band.storage.resize(static_cast<size_t>(band.rows) * m_shape.frames);
+    band.data = band.storage.data();
+    tbb::parallel_for(0, m_shape.frames, [&](int frame) {
+        m_source.read_rows(frame, row_begin, row_end, band.data + frame * band.rows);
+    });
+    const PatchRows patch_rows = m_patches;
+    std::vector<float> as_read;  // --stage modes: the patch rows as the files hold them
+    const std::int64_t patch_first = (patch_rows.row_begin - row_begin) * row_samples();
+    const std::int64_t patch_samples = (patch_rows.row_end - patch_rows.row_begin) * row_samples();
+    if (patch_rows.patches) {
+        as_read.resize(static_cast<size_t>(patch_samples) * m_shape.frames);
+        for (int t = 0; t < m_shape.frames; ++t)
+            std::copy_n(band.data + t * band.rows + patch_first, patch_samples, as_read.begin() + t * patch_samples);
+    }
+    const std::int64_t first_sample = static_cast<std::int64_t>(row_begin) * row_samples();
+    if (cleaning == Cleaning::Again && m_cleaned_samples.empty()) {  // no counted read marked them: clean in full
+        lowrank::clean_outliers(band.view(m_shape.frames), m_outlier_options, nullptr);
+    } else if (cleaning == Cleaning::Count) {
+        std::uint8_t* marks =
+            m_plan.in_memory || m_cleaned_samples.empty() ? nullptr : m_cleaned_samples.data() + first_sample;
+        const lowrank::OutlierCounts found = lowrank::clean_outliers(band.view(m_shape.frames), m_outlier_options, marks);
+        m_outliers.non_finite += found.non_finite;
+        m_outliers.fireflies += found.fireflies;
+    } else {
+        lowrank::clean_marked_outliers(band.view(m_shape.frames), m_outlier_options,
+                                       m_cleaned_samples.data() + first_sample);
+    }
+    if (patch_rows.patches) {  // bitwise, so that a replaced NaN counts too
+        const std::int64_t first = (patch_rows.row_begin - patch_rows.first_row) * row_samples();
+        for (int t = 0; t < m_shape.frames; ++t)
+            for (std::int64_t i = 0; i < patch_samples; ++i) {
+                const float cleaned = band.data[t * band.rows + patch_first + i];
+                if (std::memcmp(&cleaned, &as_read[static_cast<size_t>(t * patch_samples + i)], sizeof cleaned))
+                    patch_rows.patches->push_back({t, first + i, cleaned});
+            }
+    }
+}
+
+void ShotStream::ensure_whole_shot()
+{
+    if (!m_plan.in_memory || m_whole.data)
+        return;
+    ++m_passes;
+    m_progress.begin(fmt::format("reading {} frames", m_shape.frames), m_shape.height);
+    read_band(m_whole, 0, m_shape.height, Cleaning::Again);
+    m_progress.end();
+}
+
+Band& ShotStream::band_with_halo(Band& band, int row, int end)
+{
+    const int begin = std::max(0, row - m_plan.halo_rows), stop = std::min(m_shape.height, end + m_plan.halo_rows);
+    if (!m_plan.in_memory) {
+        read_band(band, begin, stop, Cleaning::Again);
+        return band;
+    }
+    band.row_begin = begin;
+    band.row_end = stop;
+    band.rows = row_samples() * (stop - begin);
+    band.stride = m_whole.stride;
+    band.data = m_whole.data + row_samples() * begin;
+    return band;
+}
+
+Band& ShotStream::read_task_band(Band& band, int row, int end)
+{
+    read_band(band, std::max(0, row - m_plan.halo_rows), std::min(m_shape.height, end + m_plan.halo_rows),
+              Cleaning::Again);
+    return band;
+}
+
+}  // namespace modestack::denoise

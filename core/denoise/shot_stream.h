@@ -1,0 +1,122 @@
+// How the passes of a denoise read the shot: bands of rows of every frame,
+// cleaned of NaN/Inf and fireflies, either read from the source (streamed) or
+// windows into the whole shot read once and kept (band_plan.h). The first read
+// of a row finds its outliers and marks the samples it changed; a streamed
+// shot's later reads redo only the marked ones (same input, same result). It
+// counts the passes over the shot and what the cleaning found, for the report.
+#pragma once
+
+#include "core/common/progress.h"
+#include "core/common/scratch_buffer.h"
+#include "core/denoise/band_plan.h"
+#include "core/denoise/frame_stream.h"
+#include "core/denoise/stage_task.h"
+#include "core/lowrank/band.h"
+#include "core/lowrank/outliers.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace modestack::denoise {
+
+/// Rows [row_begin, row_end) of every frame: sample i of frame t is data[t * stride + i].
+/// Either read from the source into `storage`, or a window into the kept shot.
+struct Band {
+    int row_begin = 0;
+    int row_end = 0;
+    std::int64_t rows = 0;    ///< samples per frame: width * (row_end - row_begin) * channels
+    std::int64_t stride = 0;  ///< samples from one frame to the next
+    float* data = nullptr;
+    ScratchBuffer<float> storage;  ///< read_band writes every sample
+
+    lowrank::MutableBandView view(int frames) const { return {data, rows, frames, stride}; }
+};
+
+class ShotStream {
+public:
+    ShotStream(FrameSource& source, const lowrank::OutlierOptions& outliers, const BandPlan& plan,
+               Progress& progress);
+
+    const ShotShape& shape() const { return m_shape; }
+    const BandPlan& plan() const { return m_plan; }
+    /// Reads of the whole shot so far (a farm task's reads of its rows count as one).
+    int passes() const { return m_passes; }
+    /// Counts one more pass (a pass whose reads go through read_band directly).
+    void count_pass() { ++m_passes; }
+    /// What the cleaning of the first reads found.
+    const lowrank::OutlierCounts& outliers() const { return m_outliers; }
+    std::int64_t row_samples() const { return static_cast<std::int64_t>(m_shape.width) * m_shape.channels; }
+
+    /// Visits the shot in bands in a fixed order: the kept shot when it is in
+    /// memory, otherwise a fresh read of each band. The first such pass counts
+    /// the outliers and marks the cleaned samples.
+    template <typename Visit> void for_each_band(Visit&& visit)
+    {
+        const bool first_pass = m_passes == 0;
+        ++m_passes;
+        if (m_plan.in_memory && !first_pass) {
+            visit(m_whole);
+            return;
+        }
+        begin_pass_progress();
+        if (m_plan.in_memory) {
+            read_band(m_whole, 0, m_shape.height, Cleaning::Count);
+            visit(m_whole);
+            m_progress.advance(m_shape.height);
+        } else {
+            if (first_pass)
+                m_cleaned_samples.assign(static_cast<size_t>(row_samples()) * m_shape.height, 0);
+            Band band;
+            for (int row = 0; row < m_shape.height; row += m_plan.band_rows) {
+                const int end = std::min(m_shape.height, row + m_plan.band_rows);
+                read_band(band, row, end, first_pass ? Cleaning::Count : Cleaning::Again);
+                visit(band);
+                m_progress.advance(end - row);
+            }
+        }
+        m_progress.end();
+    }
+
+    /// The kept shot, read and cleaned now when no earlier pass read it (a farm task).
+    void ensure_whole_shot();
+    /// Rows [row, end) of every frame with the plan's halo rows around them: a
+    /// window into the kept shot, or read into `band`.
+    Band& band_with_halo(Band& band, int row, int end);
+    /// A farm task's band: rows [row, end) with the plan's halo rows around them,
+    /// read from the source (never the whole shot), cleaned in full.
+    Band& read_task_band(Band& band, int row, int end);
+    /// While set (a farm modes task), reads record the cleaned values of rows
+    /// [row_begin, row_end) that differ from the files, samples counted from
+    /// `first_row`; null patches: stop recording.
+    void record_patches(int row_begin, int row_end, int first_row, std::vector<ModeImages::Patch>* patches)
+    {
+        m_patches = {row_begin, row_end, first_row, patches};
+    }
+
+    enum class Cleaning {
+        Count,  ///< the first read of the rows: clean, count and (streamed) mark
+        Again,  ///< a later read: redo the marked samples, or everything when no read marked them (a farm task)
+    };
+    /// Reads rows [row_begin, row_end) of every frame (frames in parallel) into `band` and cleans them.
+    void read_band(Band& band, int row_begin, int row_end, Cleaning cleaning);
+
+private:
+    void begin_pass_progress();
+
+    FrameSource& m_source;
+    const lowrank::OutlierOptions& m_outlier_options;
+    BandPlan m_plan;
+    Progress& m_progress;
+    ShotShape m_shape;
+    int m_passes = 0;
+    lowrank::OutlierCounts m_outliers;
+    Band m_whole;  // the kept shot, when it fits in memory
+    // Streaming: 1 for each sample whose row (over frames) the outlier cleaning changed.
+    std::vector<std::uint8_t> m_cleaned_samples;
+    struct PatchRows {
+        int row_begin = 0, row_end = 0, first_row = 0;
+        std::vector<ModeImages::Patch>* patches = nullptr;
+    } m_patches;
+};
+
+}  // namespace modestack::denoise
