@@ -73,7 +73,7 @@ def main_table(evaluations):
 
 
 def summary_table(evaluations):
-    """The README's short table: denoise auto and best N, 4 spp input, against the best baseline."""
+    """The short summary table (quality_summary.md): denoise auto and best N, 4 spp input, against the best baseline."""
     lines = ["| shot (4 spp in) | relMSE noisy | best baseline (relMSE) | denoise auto: N, relMSE, equiv. spp (≥ c/e), speed-up (≥) | best N: relMSE |",
              "|---|---:|---|---|---|"]
     for evaluation in evaluations:
