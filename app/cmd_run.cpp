@@ -5,7 +5,8 @@
 // contact sheet. Each stage is the very subcommand a user would type (run in
 // this process, not spawned), so `run` and the stages by hand give the same
 // files. With --reference-spp it also renders a reference and measures relMSE,
-// equivalent spp and the equal-quality speed-up as DESIGN.md defines them.
+// equivalent spp and the equal-quality speed-up as docs/design.md, "How quality is
+// measured", defines them.
 // The contact sheet goes through the OCIO config's display/view.
 #include "app/command.h"
 #include "app/report/denoise_report.h"

@@ -1,5 +1,5 @@
-// The measurements of `modestack run --reference-spp` (DESIGN.md, "How we measure
-// quality"): from the per-frame relMSE of the noisy, denoised and refined results
+// The measurements of `modestack run --reference-spp` (docs/design.md, "How
+// quality is measured"): from the per-frame relMSE of the noisy, denoised and refined results
 // against the reference, and the two renders' times, the JSON block with relMSE,
 // equivalent spp and the equal-quality speed-up of each, for the indirect layer and
 // the beauty.

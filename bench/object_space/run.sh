@@ -12,7 +12,7 @@
 #  3. scores everything with `modestack compare --layer DiffInd` against the
 #     reference and writes bench/results/object_space.md: relMSE, PSNR, flicker,
 #     equivalent spp c/(e - b) with c = e_noisy / (1/SPP + 1/REF_SPP) and b = c/REF_SPP
-#     (DESIGN.md, "How we measure quality", with c from the input alone), and
+#     (docs/design.md, "How quality is measured", with c from the input alone), and
 #     bench/results/object_space_<shot>.png (noisy | image space --no-mode-filter |
 #     image space | object space | reference of one frame, DiffInd tone-mapped).
 # Environment: OBJECT_DIR (work files, default /tmp/modestack-object), BUILD_DIR

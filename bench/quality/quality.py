@@ -10,7 +10,7 @@ Subcommands:
   report QUALITY_DIR RESULTS_DIR ...    quality.md, quality_summary.md, quality.json and
                                         quality_*.png in RESULTS_DIR (quality_report.py)
 
-Every figure follows DESIGN.md, "How we measure quality": relMSE and flicker come from
+Every figure follows docs/design.md, "How quality is measured": relMSE and flicker come from
 `modestack compare --json`; relMSE(s) = c/s is fitted on the noisy renders (least squares on
 log c) with the reference's own expected error b = c/ref_spp added to the model, since the
 reference is only 16-256 times cleaner than the inputs; the equivalent spp of an error e is
@@ -161,7 +161,7 @@ def render_key(path):
           data["seed"], "true" if data["fixed_seed"] else "false")
 
 
-# ---------------------------------------------------------------- the measures of DESIGN.md
+# ------------------------------------------ the measures of docs/design.md, "How quality is measured"
 
 def fit_c(spp_to_error, ref_spp):
     """c of relMSE(s) = c/s + c/ref_spp, least squares on log c."""

@@ -73,7 +73,7 @@ def main_table(evaluations):
 
 
 def summary_table(evaluations):
-    """The README's short table: denoise auto and best N, 4 spp input, against the best baseline."""
+    """The short summary table (quality_summary.md): denoise auto and best N, 4 spp input, against the best baseline."""
     lines = ["| shot (4 spp in) | relMSE noisy | best baseline (relMSE) | denoise auto: N, relMSE, equiv. spp (≥ c/e), speed-up (≥) | best N: relMSE |",
              "|---|---:|---|---|---|"]
     for evaluation in evaluations:
@@ -270,7 +270,7 @@ def report(arguments):
              f"reference {arguments.ref_spp} spp with seed {arguments.ref_seed}, noisy renders with seed 1. "
              f"The Cycles shot `spin_room` (160x120, 48 frames): 4 spp (seed 11) against its 512-spp reference "
              f"(seed 505); its render times are Blender's per-frame times from its `timing.json`.", "",
-             "Measures (DESIGN.md, \"How we measure quality\"): relMSE = mean (x − r)² / (r² + 0.01); flicker = mean "
+             "Measures (docs/design.md, \"How quality is measured\"): relMSE = mean (x − r)² / (r² + 0.01); flicker = mean "
              "((x_t − x_{t−1}) − (r_t − r_{t−1}))² / (((r_t + r_{t−1})/2)² + 0.01), both from `modestack compare --json`. "
              "relMSE(s) = c/s + b is fitted on the noisy renders (least squares on log c), b = c / ref spp the "
              "reference's own expected relMSE; equivalent spp = c / (e − b). Speed-up = frames × t(equivalent spp) / "

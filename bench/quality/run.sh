@@ -17,7 +17,7 @@
 #  5. quality.py fits relMSE(s) = c/s, the time model t(s) = t0 + k*s, and quality_report.py
 #     writes bench/results/quality.md (+ quality_summary.md, quality.json) and the plots
 #     bench/results/quality_{relmse_vs_spp,spectra,error_maps}.png.
-# The formulas are the ones of DESIGN.md, "How we measure quality".
+# The formulas are the ones of docs/design.md, "How quality is measured".
 #
 # Environment: QUALITY_DIR (work files, default /tmp/modestack-quality), BUILD_DIR (default
 # $QUALITY_DIR/build; set it to an existing Release build to skip building), SIZE, FRAMES,

@@ -1,6 +1,6 @@
 // The albedo, normal and depth channels of the input as a guide for the mode
-// filter (mode_filter.h; [0052], [0058]; DESIGN.md: on sharp shadows and texture
-// edges the blur must be edge-aware to gain). These features come from the first
+// filter (mode_filter.h; [0052], [0058]; docs/design.md, "Estimators": on sharp
+// shadows and texture edges the blur must be edge-aware to gain). These features come from the first
 // surface a camera ray hits, not from the indirect light's random paths, so their
 // noise is independent of the coefficient images' noise: weights built from them
 // are fixed with respect to that noise and SURE stays unbiased, for every mode

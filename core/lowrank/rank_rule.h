@@ -6,7 +6,7 @@
 // keeps a few very noisy pixels from buying modes of their own.
 // The seed's unexplained-variance rule and a Gavish–Donoho noise-floor rule are
 // kept for comparison (on real renders both keep far too many modes, see
-// DESIGN.md); `fixed` validates a user's --rank N.
+// docs/design.md, "Estimators"); `fixed` validates a user's --rank N.
 #pragma once
 
 #include "core/lowrank/basis.h"

@@ -1,5 +1,5 @@
 // Error figures of an image under test x against its reference r, exactly as
-// DESIGN.md "How we measure quality" defines them, so that every figure the
+// docs/design.md, "How quality is measured", defines them, so that every figure the
 // project quotes is comparable: relMSE = (x - r)^2 / (r^2 + 0.01), PSNR on the
 // tonemapped image (x / (1 + x))^(1/2.2) clipped to [0, 1] with peak 1, mean and
 // maximum absolute error, idiff's failing/warning pixel counts (a pixel fails

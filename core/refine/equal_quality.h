@@ -1,4 +1,4 @@
-// The project's quality figures (DESIGN.md, "How we measure quality") as plain
+// The project's quality figures (docs/design.md, "How quality is measured") as plain
 // functions, for `modestack run --reference-spp`: relMSE, the noise constant c of
 // relMSE(s) = c / s fitted on a noisy render, the equivalent spp of a result, and
 // the renderer's time model t(s) = t0 + k·s for the equal-quality speed-up.

@@ -51,7 +51,8 @@ double tonemap(double v)
     return v <= 0 ? 0.0 : std::pow(v / (1.0 + v), 1.0 / 2.2);
 }
 
-// The figures of DESIGN.md computed directly from two pixel functions.
+// The figures of docs/design.md, "How quality is measured", computed directly
+// from two pixel functions.
 struct Expected {
     double relative_mse = 0, psnr = 0, flicker = 0;
 };

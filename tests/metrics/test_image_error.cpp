@@ -14,7 +14,8 @@
 using namespace modestack::metrics;
 
 namespace {
-// Closed forms of DESIGN.md's definitions, written independently of the library.
+// Closed forms of the definitions in docs/design.md, "How quality is measured",
+// written independently of the library.
 double expected_tonemap(double v)
 {
     return std::pow(v / (1.0 + v), 1.0 / 2.2);
