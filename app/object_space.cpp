@@ -69,9 +69,9 @@ private:
 // Positions and normals of the points in the shot's first frame (their rest
 // pose: neighbours on a surface stay neighbours as it moves), or an empty
 // result when the points files lack either layer.
-denoise::SurfaceSamples read_surface_samples(const io::FrameSequence& files, std::int64_t count, double spacing)
+objectspace::SurfaceSamples read_surface_samples(const io::FrameSequence& files, std::int64_t count, double spacing)
 {
-    denoise::SurfaceSamples samples;
+    objectspace::SurfaceSamples samples;
     samples.spacing = spacing;
     io::FrameSequence first = files;
     first.files.resize(1);
@@ -188,27 +188,27 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
     result.report = denoise::run_denoise(noisy, store, settings, progress);
     // Sigma (and the filter) over the surfaces: the engine's sigma pooled over a
     // point image's rows, which are not surface neighbours.
-    denoise::SurfaceSamples samples = read_surface_samples(point_files, result.points, header.spacing);
+    objectspace::SurfaceSamples samples = read_surface_samples(point_files, result.points, header.spacing);
     if (samples.count() == 0 || !(samples.spacing > 0)) {
         progress.warn(fmt::format("{} has no Position and Normal layers or no modestack:point_spacing: sigma is "
                                   "the point image's and the points are not filtered over the surfaces",
                                   point_files.files.front()));
     } else {
         const int frame_count = point_reader.frame_count();
-        std::vector<denoise::SurfaceFrame> frames;
+        std::vector<objectspace::SurfaceFrame> frames;
         for (int t = 0; t < frame_count; ++t) {
             double leverage = 0;
             for (const std::vector<double>& mode : result.report.temporal_modes)
                 leverage += mode[static_cast<std::size_t>(t)] * mode[static_cast<std::size_t>(t)];
             frames.push_back({noisy.frame(t), store.values(t), store.sigma(t), leverage});
         }
-        denoise::SurfaceFilterOptions options;
+        objectspace::SurfaceFilterOptions options;
         options.widths = job.filter_widths;
         options.filter = job.surface_filter;
         options.window_spacings = std::max(1, job.sigma_radius);
         options.rank = result.report.rank.rank;
         progress.begin("surface filter and sigma", 1);
-        result.filter = denoise::filter_surfaces(samples, options, point_reader.selected_channel_count(), frames);
+        result.filter = objectspace::filter_surfaces(samples, options, point_reader.selected_channel_count(), frames);
         progress.end();
     }
 

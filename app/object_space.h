@@ -4,7 +4,7 @@
 // PointLookup layer of the frame). The points go through the same reader, engine,
 // rank rule and confidence as images; the image mode filter and the spatial
 // pooling of sigma are left out, because neighbours in a point image are not
-// neighbours on the surfaces: the surface filter (core/denoise/surface_filter.h)
+// neighbours on the surfaces: the surface filter (core/objectspace/surface_filter.h)
 // takes the mode filter's place, over the points' positions and normals. The frames are written like an image-space
 // denoise's (every input channel kept, the layer replaced, sigma appended), so
 // refine works on them unchanged.
@@ -13,7 +13,7 @@
 #include "core/common/progress.h"
 #include "core/denoise/engine.h"
 #include "core/denoise/frame_stream.h"
-#include "core/denoise/surface_filter.h"
+#include "core/objectspace/surface_filter.h"
 #include "io/frame_output.h"
 #include "io/sequence.h"
 
@@ -53,7 +53,7 @@ struct ObjectSpaceJob {
     std::vector<std::string> layers;              ///< --layer, for frames and points alike
     std::vector<std::string> outputs;             ///< per frame; "" = not written
     std::vector<io::HeaderAttribute> attributes;  ///< provenance for every output
-    bool surface_filter = true;                   ///< filter over the surfaces (denoise/surface_filter.h)
+    bool surface_filter = true;                   ///< filter over the surfaces (objectspace/surface_filter.h)
     std::vector<double> filter_widths;            ///< its candidate widths, in lattice spacings
     int sigma_radius = 2;                         ///< sigma's pooling window, in lattice spacings (≥ 1 used)
 };
@@ -61,7 +61,7 @@ struct ObjectSpaceJob {
 /// What the job did, for the summary.
 struct ObjectSpaceResult {
     denoise::Report report;     ///< the engine's, on the points
-    denoise::SurfaceFilterChoice filter;  ///< what the surface filter chose (width 0: none)
+    objectspace::SurfaceFilterChoice filter;  ///< what the surface filter chose (width 0: none)
     std::int64_t points = 0;    ///< surface points (from the points files)
     int frame_width = 0, frame_height = 0;
 };
