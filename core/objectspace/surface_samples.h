@@ -22,7 +22,7 @@ struct SurfaceFrame {
     const float* noisy;
     float* values;
     float* sigma;
-    double leverage = 0; ///< h_t = Σ_{j≤N} V_tj²: the share of a frame's noise the rebuild keeps (surface_filter.h)
+    double leverage = 0; ///< h_t = Σ_{j≤N} V_tj²: the share of a frame's noise the rebuild keeps (leverage.h)
 };
 
 } // namespace modestack::objectspace
