@@ -15,8 +15,7 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/training.cpp
   ${CMAKE_CURRENT_LIST_DIR}/transform.cpp
   ${CMAKE_CURRENT_LIST_DIR}/weight_smoothing.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/whitening.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/surface_filter.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/whitening.cpp)
 # The filter weights' exp clamps with a compare-and-select, which GCC evaluates on
 # every vector lane only without trapping maths (floating-point exceptions are
 # never enabled here; each operation still rounds as IEEE says). Not project-wide:

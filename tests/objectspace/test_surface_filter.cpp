@@ -4,7 +4,7 @@
 // lowers the error, nothing bleeds across the corner (the normals differ), sigma
 // matches the actual error, a clean field is left as it is, and the result does
 // not depend on the thread count.
-#include "core/denoise/surface_filter.h"
+#include "core/objectspace/surface_filter.h"
 
 #include <doctest/doctest.h>
 #include <tbb/task_arena.h>
@@ -15,7 +15,7 @@
 #include <vector>
 
 using namespace modestack;
-using denoise::SurfaceFrame;
+using objectspace::SurfaceFrame;
 
 namespace {
 
@@ -24,7 +24,7 @@ constexpr double kSpacing = 0.05;
 constexpr double kNoise = 0.2;
 
 struct Corner {
-    denoise::SurfaceSamples samples;
+    objectspace::SurfaceSamples samples;
     std::vector<double> truth;   // per point (one channel), times the temporal profile
     std::vector<double> profile; // unit-length temporal mode
     std::vector<std::vector<float>> noisy, rebuilt, sigma;
@@ -82,17 +82,17 @@ Corner make_corner(double noise, bool blob = false)
     return corner;
 }
 
-denoise::SurfaceFilterChoice filter(Corner& corner, bool filter_on = true)
+objectspace::SurfaceFilterChoice filter(Corner& corner, bool filter_on = true)
 {
     std::vector<SurfaceFrame> frames;
     for (int t = 0; t < kFrames; ++t)
         frames.push_back({corner.noisy[t].data(), corner.rebuilt[t].data(), corner.sigma[t].data(),
                           corner.profile[t] * corner.profile[t]});
-    denoise::SurfaceFilterOptions options;
+    objectspace::SurfaceFilterOptions options;
     options.widths = {0.75, 1.0, 1.5, 2.0, 3.0};
     options.filter = filter_on;
     options.rank = 1;
-    return denoise::filter_surfaces(corner.samples, options, 1, frames);
+    return objectspace::filter_surfaces(corner.samples, options, 1, frames);
 }
 
 double rms_error(const Corner& corner, const std::vector<std::vector<float>>& values)
@@ -112,7 +112,7 @@ TEST_CASE("surface filter: SURE picks a width that lowers the error, without ble
 {
     Corner corner = make_corner(kNoise);
     const double before = rms_error(corner, corner.rebuilt);
-    denoise::SurfaceFilterChoice choice = filter(corner);
+    objectspace::SurfaceFilterChoice choice = filter(corner);
     const double after = rms_error(corner, corner.rebuilt);
     MESSAGE("width " << choice.width << " spacings, RMS error " << before << " -> " << after << "; "
                      << choice.reasoning);
@@ -161,7 +161,7 @@ TEST_CASE("surface filter: a clean field is not filtered and keeps its values, a
 {
     Corner clean = make_corner(0.0);
     std::vector<std::vector<float>> before = clean.rebuilt;
-    denoise::SurfaceFilterChoice choice = filter(clean);
+    objectspace::SurfaceFilterChoice choice = filter(clean);
     CHECK(choice.width == 0);
     CHECK(clean.rebuilt == before);
 

@@ -1,0 +1,48 @@
+// The spatial filter of object space: what the mode filter is to images, over the
+// surfaces. After the temporal low-rank rebuild, each point's value still carries
+// the noise its own bake left in the kept modes; neighbouring points on the same
+// surface see nearly the same light, so a Gaussian over them (in metres, in units
+// of the lattice spacing; surface_kernel.h) removes most of it. The width is
+// chosen by Stein's unbiased risk estimate (surface_sure.h) over all points and
+// frames, from the per-point noise level (surface_noise.h), so no width is fitted
+// to a scene; "no filter" is always a candidate. Points only average with points
+// within the kernel's reach whose normals agree (same surface orientation;
+// surface_neighbours.h), so a box's faces, or a wall and the floor, do not bleed
+// into each other.
+#pragma once
+
+#include "core/objectspace/surface_samples.h"
+
+#include <string>
+#include <vector>
+
+namespace modestack::objectspace {
+
+/// What the SURE survey found.
+struct SurfaceFilterChoice {
+    double width = 0;                ///< chosen Gaussian sigma in spacings (0: no filter)
+    std::vector<double> widths;      ///< candidates, 0 first
+    std::vector<double> risks;       ///< SURE per candidate, per value (same order)
+    double mean_neighbours = 0;      ///< points within reach of the widest kernel, on average
+    std::string reasoning;           ///< one line for the summary
+};
+
+/// How to filter.
+struct SurfaceFilterOptions {
+    std::vector<double> widths;  ///< candidate Gaussian sigmas, in spacings (0 = none is always tried)
+    bool filter = true;          ///< false: only sigma
+    double window_spacings = 2;  ///< radius of sigma's pooling window, in spacings
+    int rank = 1;                ///< N of the rebuild
+};
+
+/// Sigma of every point and frame, as lowrank/confidence.h computes it for
+/// pixels but pooled over the surface neighbours within the window instead of
+/// an image window (a point image's neighbours are not the surface's), and,
+/// when asked, the width among 0 and options.widths with the lowest SURE, using
+/// s²·h_t as each rebuilt value's noise variance; every frame is then filtered
+/// in place with it. Sigma after filtering: sqrt(Σ_q H_pq² s_q² h_t + b_t²).
+/// Throws std::invalid_argument without points, frames or a spacing.
+SurfaceFilterChoice filter_surfaces(const SurfaceSamples& samples, const SurfaceFilterOptions& options, int channels,
+                                    std::vector<SurfaceFrame>& frames);
+
+} // namespace modestack::objectspace

@@ -1,0 +1,35 @@
+// The neighbours of every surface point: the points within a radius (in metres,
+// in the rest pose) whose normals agree, found through a grid of cells as wide
+// as the radius. Each point's list starts with the point itself and runs nearest
+// first, so the neighbours within any smaller radius are a prefix of it.
+#pragma once
+
+#include "core/objectspace/surface_samples.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace modestack::objectspace {
+
+/// Neighbours of every point within a radius, with normals within an angle.
+class SurfaceNeighbours {
+public:
+    /// `radius` in metres; `min_cosine`: smallest dot product of the two normals.
+    SurfaceNeighbours(const SurfaceSamples& samples, double radius, double min_cosine);
+    /// Points (as many as the samples had).
+    std::int64_t count() const { return static_cast<std::int64_t>(m_first.size()) - 1; }
+    /// Neighbours of point p (itself included) and their squared distances.
+    const std::int64_t* ids(std::int64_t p) const { return m_ids.data() + m_first[p]; }
+    const float* distances_squared(std::int64_t p) const { return m_distances.data() + m_first[p]; }
+    std::int64_t size(std::int64_t p) const { return m_first[p + 1] - m_first[p]; }
+    double mean_size() const;
+    /// How many of p's neighbours (itself first) lie within `radius` metres.
+    int count_within(std::int64_t p, double radius) const;
+
+private:
+    std::vector<std::int64_t> m_first; // CSR offsets, count + 1
+    std::vector<std::int64_t> m_ids;
+    std::vector<float> m_distances;
+};
+
+} // namespace modestack::objectspace

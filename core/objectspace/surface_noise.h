@@ -1,0 +1,22 @@
+// The noise level of the surface points, as lowrank/confidence.h estimates it
+// for pixels but pooled over a point's surface neighbours instead of an image
+// window (a point image's neighbours are not the surface's): from the residual
+// r = noisy − rebuilt, high-passed against its window (d = r_p − mean of r over
+// p's window without p, whose variance is (1 + 1/k)·s² for white noise), summed
+// over the frames and pooled over the window, with F − N degrees of freedom.
+#pragma once
+
+#include "core/objectspace/surface_neighbours.h"
+#include "core/objectspace/surface_samples.h"
+
+#include <vector>
+
+namespace modestack::objectspace {
+
+/// s², the variance of one noisy value, per point and channel ([point][channel]),
+/// from the residuals of `frames` over the neighbours within `window` metres.
+/// `rank`: N of the rebuild.
+std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, double window,
+                                           const std::vector<SurfaceFrame>& frames, int channels, int rank);
+
+} // namespace modestack::objectspace

@@ -1,0 +1,142 @@
+// The surface neighbours against a brute-force search: random points on two
+// faces of a box (some at negative coordinates, so the cell keys' offset
+// matters) and a few with tilted normals; every point's list is itself first,
+// then exactly the points within the radius whose normals agree, nearest first;
+// count_within is a prefix; and the lists do not depend on the thread count.
+// Then the Gaussian kernel over them: p first and heaviest, weights falling with
+// distance, cut at kReachInSigmas, summing to 1.
+#include "core/objectspace/surface_kernel.h"
+#include "core/objectspace/surface_neighbours.h"
+
+#include <doctest/doctest.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <utility>
+#include <vector>
+
+using namespace modestack;
+using objectspace::SurfaceNeighbours;
+using objectspace::SurfaceSamples;
+
+namespace {
+
+constexpr double kMinCosine = 0.9;
+
+SurfaceSamples random_box_faces(int count, unsigned seed)
+{
+    SurfaceSamples samples;
+    samples.spacing = 0.05;
+    std::mt19937 random(seed);
+    std::uniform_real_distribution<float> along(-0.6f, 0.4f);
+    for (int i = 0; i < count; ++i) {
+        const float a = along(random), b = along(random);
+        switch (i % 3) {
+        case 0: // floor y = -0.2, normal +y
+            samples.positions.insert(samples.positions.end(), {a, -0.2f, b});
+            samples.normals.insert(samples.normals.end(), {0.0f, 1.0f, 0.0f});
+            break;
+        case 1: // wall x = -0.3, normal +x
+            samples.positions.insert(samples.positions.end(), {-0.3f, a, b});
+            samples.normals.insert(samples.normals.end(), {1.0f, 0.0f, 0.0f});
+            break;
+        default: { // on the floor, normal tilted by 20° (cosine 0.94 with the floor's: still agrees)
+            const float angle = 20.0f * 3.14159265f / 180.0f;
+            samples.positions.insert(samples.positions.end(), {a, -0.2f, b});
+            samples.normals.insert(samples.normals.end(), {std::sin(angle), std::cos(angle), 0.0f});
+        }
+        }
+    }
+    return samples;
+}
+
+// Point p's neighbours by brute force, with the list's float arithmetic: nearest
+// first (ties by id), p itself first.
+std::vector<std::pair<float, std::int64_t>> brute_force(const SurfaceSamples& samples, std::int64_t p, double radius)
+{
+    const float* x = samples.positions.data();
+    const float* n = samples.normals.data();
+    std::vector<std::pair<float, std::int64_t>> found;
+    for (std::int64_t q = 0; q < samples.count(); ++q) {
+        if (q == p)
+            continue;
+        float cosine = n[3 * p] * n[3 * q] + n[3 * p + 1] * n[3 * q + 1] + n[3 * p + 2] * n[3 * q + 2];
+        float ex = x[3 * p] - x[3 * q], ey = x[3 * p + 1] - x[3 * q + 1], ez = x[3 * p + 2] - x[3 * q + 2];
+        float d2 = ex * ex + ey * ey + ez * ez;
+        if (cosine >= kMinCosine && d2 <= static_cast<float>(radius * radius))
+            found.emplace_back(d2, q);
+    }
+    std::sort(found.begin(), found.end());
+    found.insert(found.begin(), {0.0f, p});
+    return found;
+}
+
+} // namespace
+
+TEST_CASE("surface neighbours: exactly the brute-force neighbours, nearest first, itself first")
+{
+    const SurfaceSamples samples = random_box_faces(1500, 3);
+    const double radius = 0.08;
+    const SurfaceNeighbours neighbours(samples, radius, kMinCosine);
+    REQUIRE(neighbours.count() == samples.count());
+    std::int64_t total = 0;
+    for (std::int64_t p = 0; p < samples.count(); ++p) {
+        const auto expected = brute_force(samples, p, radius);
+        REQUIRE(neighbours.size(p) == static_cast<std::int64_t>(expected.size()));
+        for (std::size_t n = 0; n < expected.size(); ++n) {
+            CHECK(neighbours.ids(p)[n] == expected[n].second);
+            CHECK(neighbours.distances_squared(p)[n] == expected[n].first);
+        }
+        // The wall's points and the floor's never meet (their normals are 90° apart).
+        for (std::int64_t n = 0; n < neighbours.size(p); ++n)
+            CHECK((neighbours.ids(p)[n] % 3 == 1) == (p % 3 == 1));
+        // count_within: the prefix within a smaller radius.
+        const double inner = 0.05;
+        const auto within = brute_force(samples, p, inner);
+        CHECK(neighbours.count_within(p, inner) == static_cast<int>(within.size()));
+        total += neighbours.size(p);
+    }
+    CHECK(neighbours.mean_size() == doctest::Approx(static_cast<double>(total) / samples.count()));
+    CHECK(neighbours.mean_size() > 3); // the test means something: points have neighbours
+}
+
+TEST_CASE("surface neighbours: the same lists for 1 and 2 threads")
+{
+    const SurfaceSamples samples = random_box_faces(3000, 5);
+    std::vector<std::int64_t> one, two;
+    auto lists = [&](std::vector<std::int64_t>& out) {
+        const SurfaceNeighbours neighbours(samples, 0.07, kMinCosine);
+        for (std::int64_t p = 0; p < samples.count(); ++p)
+            out.insert(out.end(), neighbours.ids(p), neighbours.ids(p) + neighbours.size(p));
+    };
+    tbb::task_arena(1).execute([&] { lists(one); });
+    tbb::task_arena(2).execute([&] { lists(two); });
+    CHECK(one == two);
+}
+
+TEST_CASE("surface kernel: p first and heaviest, falling with distance, cut at its reach, summing to 1")
+{
+    const SurfaceSamples samples = random_box_faces(2000, 7);
+    const double width = 0.5, spacing = samples.spacing, sigma = width * spacing;
+    const SurfaceNeighbours neighbours(samples, objectspace::kReachInSigmas * sigma * 1.5, kMinCosine);
+    std::vector<double> weights;
+    for (std::int64_t p = 0; p < samples.count(); p += 37) {
+        objectspace::gaussian_weights(neighbours, p, width, spacing, weights);
+        const float* d2 = neighbours.distances_squared(p);
+        double sum = 0;
+        for (std::size_t n = 0; n < weights.size(); ++n) {
+            sum += weights[n];
+            if (n > 0) {
+                CHECK(weights[n] <= weights[n - 1]);
+                CHECK(weights[n] / weights[0] == doctest::Approx(std::exp(-0.5 * d2[n] / (sigma * sigma))));
+            }
+        }
+        CHECK(sum == doctest::Approx(1.0).epsilon(1e-12));
+        // Exactly the neighbours within the reach (the list goes further).
+        CHECK(weights.size() == static_cast<std::size_t>(
+                                    neighbours.count_within(p, objectspace::kReachInSigmas * sigma)));
+    }
+}
