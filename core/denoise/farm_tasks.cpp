@@ -54,18 +54,20 @@ RunPlan plan_task(const PassContext& context, Stage stage, Report& report, int r
     return plan;
 }
 
-// The tasks after the solve: the modes from the merged sums, N, and (modes and
-// write) the survey's choice from every row's sums.
+// What the modes and write tasks start from: the modes from the merged sums,
+// the survey's choice (filters and N) from every row's sums, and pass 2's
+// temporal matrices.
 struct Solved {
     Solution solution;
     Survey survey;
+    RebuildBasis modes;
 };
 
 Solved solved_from(const PassContext& context, const RunPlan& plan, const SolvedSums& solved, const SurveyRows& survey,
                    Report& report)
 {
     const ShotShape shape = context.source.shape();
-    Solved result{solution_from_gram(context.settings, solved.gram), {}};
+    Solved result{solution_from_gram(context.settings, solved.gram), {}, {}};
     report.outliers = solved.outliers;
     if (context.settings.mode_filter.enabled) {
         if (static_cast<int>(survey.sums.size()) != shape.height)
@@ -77,6 +79,10 @@ Solved solved_from(const PassContext& context, const RunPlan& plan, const Solved
     report.rank = result.survey.rank;
     report.mode_filter = result.survey.plan;
     describe_solution(context.settings, shape, result.solution, report.rank.rank, report);
+    result.modes = make_rebuild_basis(context.settings, result.solution.basis, report.rank.rank, result.survey.modes,
+                                      nullptr, report.rank.noise_sigma);
+    report.shrinkage = result.modes.shrinkage;
+    report.weight_smoothing = result.modes.weight_smoothing;
     return result;
 }
 
@@ -144,10 +150,7 @@ TaskResult<ModeImages> modes_task(const PassContext& context, const SolvedSums& 
     const ShotShape& shape = report.shape;
     const Solved modes_of = solved_from(context, plan, solved, survey, report);
     const Settings& settings = context.settings;
-    const RebuildBasis modes = make_rebuild_basis(settings, modes_of.solution.basis, report.rank.rank,
-                                                  modes_of.survey.modes, nullptr, report.rank.noise_sigma);
-    report.shrinkage = modes.shrinkage;
-    report.weight_smoothing = modes.weight_smoothing;
+    const RebuildBasis& modes = modes_of.modes;
     const auto start = Clock::now();
     BandRebuilder rebuilder(settings, shape, modes, plan.filter, modes_of.survey.plan, modes_of.survey.modes,
                             plan.features ? &*plan.features : nullptr);
@@ -206,10 +209,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     const ShotShape& shape = report.shape;
     const Solved modes_of = solved_from(context, plan, solved, survey, report);
     const Settings& settings = context.settings;
-    const RebuildBasis modes = make_rebuild_basis(settings, modes_of.solution.basis, report.rank.rank,
-                                                  modes_of.survey.modes, nullptr, report.rank.noise_sigma);
-    report.shrinkage = modes.shrinkage;
-    report.weight_smoothing = modes.weight_smoothing;
+    const RebuildBasis& modes = modes_of.modes;
     const auto start = Clock::now();
     BandRebuilder rebuilder(settings, shape, modes, plan.filter, modes_of.survey.plan, modes_of.survey.modes, nullptr);
     const ShotModes shot = join_modes_bands(bands, shape, modes.rank, modes.output_modes,
