@@ -184,7 +184,7 @@ def main():
         for name, kind, what in problems:
             details.write(f"{name}: {kind}: {what}\n")
     if not problems:
-        print(f"same ({len(old_files)} files" + (f"; {only_timings} differ only in timings)" if only_timings else ")"))
+        print(f"same ({len(old_files)} files" + (f"; {only_timings} equal once timings are ignored)" if only_timings else ")"))
         return 0
     # One part per kind of difference, most telling first, with its first file.
     order = ["missing", "EXR pixels", "EXR header only", "EXR bytes only", "JSON", "HTML", "text", "bytes"]

@@ -32,7 +32,7 @@
 #   EXTRA_NEW_ARGS  options added to every denoise command of NEW only, to show that
 #                   the check catches a change (e.g. EXTRA_NEW_ARGS="--sigma-radius 3")
 # Needs idiff (openimageio-tools), python3, and mpirun for the MPI cases
-# (skipped without it). 8.8 minutes on 2 cores shared with builds (load average 11).
+# (skipped without it). 9 minutes on 2 cores shared with other builds (load average 7-11).
 set -uo pipefail
 
 usage() {
