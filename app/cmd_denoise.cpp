@@ -454,7 +454,6 @@ int run_denoise(const DenoiseOptions& options)
     settings.max_memory_bytes = engine_memory_budget(settings.max_memory_bytes, reader, frames_written,
                                                      reader.selected_channel_count(), guides);
     SequenceSink sink(reader, paths, options.save_modes);
-    sink.reuse_rows_of(source);
     sink.write_rank_map_to(options.rank_map);
     std::vector<io::HeaderAttribute> attributes = provenance_attributes(input);
     append_color_attributes(attributes, color);

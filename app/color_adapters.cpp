@@ -30,9 +30,10 @@ LinearizingSource::LinearizingSource(denoise::FrameSource& inner, const io::Colo
     check_triples(inner.shape());
 }
 
-void LinearizingSource::read_rows(int frame_index, int row_begin, int row_end, float* destination)
+void LinearizingSource::read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                                  denoise::PassThroughRows* pass_through)
 {
-    m_inner.read_rows(frame_index, row_begin, row_end, destination);
+    m_inner.read_rows(frame_index, row_begin, row_end, destination, pass_through);
     m_converter.to_scene_linear(destination, row_triples(m_inner.shape(), row_begin, row_end));
 }
 
@@ -44,13 +45,13 @@ DelinearizingSink::DelinearizingSink(denoise::FrameSink& inner, const io::ColorC
 }
 
 void DelinearizingSink::write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
-                                   const float* sigma)
+                                   const float* sigma, const denoise::PassThroughRows* pass_through)
 {
     std::size_t triples = row_triples(m_shape, row_begin, row_end);
     thread_local std::vector<float> encoded;
     encoded.assign(rebuilt, rebuilt + triples * 3);
     m_converter.from_scene_linear(encoded.data(), triples);
-    m_inner.write_rows(frame_index, row_begin, row_end, encoded.data(), sigma);
+    m_inner.write_rows(frame_index, row_begin, row_end, encoded.data(), sigma, pass_through);
 }
 
 DenoiseColor choose_denoise_color(const std::string& ocio_config, const std::string& colorspace,

@@ -31,7 +31,8 @@ public:
     /// `inner` and `converter` must outlive this object; the source's channels
     /// must be whole RGB triples (3 per layer).
     LinearizingSource(denoise::FrameSource& inner, const io::ColorConverter& converter);
-    void read_rows(int frame_index, int row_begin, int row_end, float* destination) override;
+    void read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                   denoise::PassThroughRows* pass_through) override;
 
 private:
     const io::ColorConverter& m_converter;
@@ -45,8 +46,8 @@ public:
     /// `inner` and `converter` must outlive this object; `shape` is the source's.
     DelinearizingSink(denoise::FrameSink& inner, const io::ColorConverter& converter,
                       denoise::ShotShape shape);
-    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
-                    const float* sigma) override;
+    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma,
+                    const denoise::PassThroughRows* pass_through) override;
 
 private:
     const io::ColorConverter& m_converter;

@@ -145,7 +145,7 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
                                          denoised.points.sigma(frame), channels, result.points,
                                          job.frames.files[static_cast<std::size_t>(frame)], rebuilt.data(),
                                          sigma.data());
-        sink.write_rows(frame, 0, frame_reader.height(), rebuilt.data(), sigma.data());
+        sink.write_rows(frame, 0, frame_reader.height(), rebuilt.data(), sigma.data(), nullptr);
         progress.advance(1);
     });
     progress.end();

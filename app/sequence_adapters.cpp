@@ -15,26 +15,21 @@ denoise::ShotShape SequenceSource::shape() const
     return {m_reader.frame_count(), m_reader.width(), m_reader.height(), m_reader.selected_channel_count()};
 }
 
-SequenceSource::SequenceSource(const io::SequenceReader& reader)
-    : m_reader(reader), m_native(static_cast<size_t>(reader.frame_count()))
-{
-}
+SequenceSource::SequenceSource(const io::SequenceReader& reader) : m_reader(reader) {}
 
-void SequenceSource::read_rows(int frame_index, int row_begin, int row_end, float* destination)
+void SequenceSource::read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                               denoise::PassThroughRows* pass_through)
 {
-    // A read of the whole height is a kept shot's single read (never a streamed band,
-    // see band_plan.h): its pass 2 reads nothing, so keeping its rows would only hold
-    // a second copy of the shot (segmented runs start later parts after a sink began).
-    const bool whole_frame = row_begin == 0 && row_end == m_reader.height();
-    if (!m_keeping || whole_frame || !m_reader.has_unselected_channels(frame_index)) {
+    if (!pass_through || !m_reader.has_unselected_channels(frame_index)) {
+        if (pass_through)
+            pass_through->bytes.clear();
         m_reader.read_selected(frame_index, row_begin, row_end, destination);
         return;
     }
-    NativeRows& native = m_native[static_cast<size_t>(frame_index)];
-    m_reader.read_native(frame_index, row_begin, row_end, native.bytes);
-    native.row_begin = row_begin;
-    native.row_end = row_end;
-    m_reader.selected_from_native(frame_index, native.bytes.data(),
+    m_reader.read_native(frame_index, row_begin, row_end, pass_through->bytes);
+    pass_through->row_begin = row_begin;
+    pass_through->row_end = row_end;
+    m_reader.selected_from_native(frame_index, pass_through->bytes.data(),
                                   static_cast<size_t>(m_reader.width()) * (row_end - row_begin), destination);
 }
 
@@ -47,14 +42,6 @@ std::int64_t SequenceSource::band_bytes_per_row() const
     return bytes;
 }
 
-const unsigned char* SequenceSource::native_rows(int frame_index, int row_begin, int row_end) const
-{
-    const NativeRows& native = m_native[static_cast<size_t>(frame_index)];
-    if (!m_keeping || native.bytes.empty() || row_begin < native.row_begin || row_end > native.row_end)
-        return nullptr;
-    return native.bytes.data() +
-           m_reader.native_pixel_bytes(frame_index) * m_reader.width() * static_cast<size_t>(row_begin - native.row_begin);
-}
 
 namespace {
 // The layer names tried for `kind`, best first; each entry is the selector list of one candidate.
@@ -146,8 +133,6 @@ void SequenceSink::begin(const denoise::RebuildStart& start)
     attributes.push_back(io::HeaderAttribute::of_integer("modestack:rank", start.rank));
     attributes.push_back(io::HeaderAttribute::of_text("modestack:rank_rule", start.rank_rule));
     attributes.push_back(io::HeaderAttribute::of_text("modestack:solver", start.solver));
-    if (m_source)  // pass 2's reads start now: keep what they decode for the copies
-        m_source->keep_native_rows();
     m_outputs.clear();
     for (size_t frame = 0; frame < m_paths.size(); ++frame)
         m_outputs.push_back(m_paths[frame].empty() ? nullptr
@@ -167,14 +152,16 @@ void SequenceSink::commit()
         m_rank_map->commit();
 }
 
-void SequenceSink::write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma)
+void SequenceSink::write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
+                              const float* sigma, const denoise::PassThroughRows* pass_through)
 {
     io::FrameOutput* output = m_outputs.at(frame_index).get();
     if (!output)
         return;
     const unsigned char* native = nullptr;
     if (output->needs_input_rows()) {  // pass-through channels to copy
-        native = m_source ? m_source->native_rows(frame_index, row_begin, row_end) : nullptr;
+        const std::size_t row_bytes = m_reader.native_pixel_bytes(frame_index) * m_reader.width();
+        native = pass_through ? pass_through->rows(row_begin, row_end, row_bytes) : nullptr;
         if (!native) {  // a kept shot: pass 2 did not read the file
             thread_local std::vector<unsigned char> decoded;
             m_reader.read_native(frame_index, row_begin, row_end, decoded);

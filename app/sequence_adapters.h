@@ -18,15 +18,16 @@
 
 namespace modestack::app {
 
-/// FrameSource over an io::SequenceReader. Once the sink starts writing, a
-/// frame with pass-through channels is decoded once per band: the source keeps
-/// its native rows, converts the selected channels from them, and the sink copies
-/// the rest from the same rows instead of decoding the file a second time.
+/// FrameSource over an io::SequenceReader. A read that asks for the pass-through
+/// rows (pass 2's) decodes a frame with other channels once: the selected
+/// channels are converted from its native rows, which go into the
+/// PassThroughRows for the sink to copy the rest from.
 class SequenceSource : public denoise::FrameSource {
 public:
     explicit SequenceSource(const io::SequenceReader& reader);
     denoise::ShotShape shape() const override;
-    void read_rows(int frame_index, int row_begin, int row_end, float* destination) override;
+    void read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                   denoise::PassThroughRows* pass_through) override;
     std::int64_t band_bytes_per_row() const override;
     /// Auxiliary layers are found by name next to the first selected layer `L`
     /// (prefix `P.` of `P.L`, none for a bare `L`): Variance `<L>Var` for each
@@ -46,18 +47,7 @@ public:
     /// Closes the files opened for `kind` (after a pre-pass that was their only use).
     void release_auxiliary(denoise::Auxiliary kind);
 
-    /// Starts keeping the native rows of each read of a frame with pass-through channels.
-    void keep_native_rows() { m_keeping = true; }
-    /// The kept native rows [row_begin, row_end) of frame `frame_index`, or
-    /// nullptr when the last read of that frame did not cover them.
-    const unsigned char* native_rows(int frame_index, int row_begin, int row_end) const;
-
 private:
-    struct NativeRows {
-        int row_begin = 0;
-        int row_end = 0;
-        std::vector<unsigned char> bytes;
-    };
     struct AuxiliaryInput {
         bool looked = false;
         std::string layer;
@@ -67,8 +57,6 @@ private:
     const AuxiliaryInput& auxiliary(denoise::Auxiliary kind) const;
 
     const io::SequenceReader& m_reader;
-    bool m_keeping = false;
-    std::vector<NativeRows> m_native;  // per frame
     mutable std::mutex m_auxiliary_mutex;
     mutable std::array<AuxiliaryInput, 4> m_auxiliary;  // by denoise::Auxiliary
 };
@@ -80,9 +68,6 @@ public:
     /// `modes_directory` ("" = none) receives mode.NN.exr per spatial mode.
     SequenceSink(const io::SequenceReader& reader, std::vector<std::string> outputs, std::string modes_directory);
 
-    /// Takes pass-through channels from the rows `source` decoded for the same
-    /// band (see SequenceSource) instead of decoding them again.
-    void reuse_rows_of(SequenceSource& source) { m_source = &source; }
     /// Attributes every output header gets (provenance), besides rank, rule and solver.
     void set_attributes(std::vector<io::HeaderAttribute> attributes) { m_attributes = std::move(attributes); }
     /// --rank-map: also writes the per-pixel rank to `path` (one channel "rank").
@@ -92,7 +77,10 @@ public:
     /// Renames every finished output into place.
     void commit();
 
-    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma) override;
+    /// Copies the other channels from `pass_through` when it holds these rows,
+    /// else decodes them from the input (a kept shot's pass 2 reads nothing).
+    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma,
+                    const denoise::PassThroughRows* pass_through) override;
     void write_mode_rows(int row_begin, int row_end, int modes, const float* spatial_modes) override;
     bool wants_modes() const override { return !m_modes_directory.empty(); }
     bool writes_frame(int frame_index) const override { return !m_paths[static_cast<size_t>(frame_index)].empty(); }
@@ -100,7 +88,6 @@ public:
 
 private:
     const io::SequenceReader& m_reader;
-    SequenceSource* m_source = nullptr;
     std::vector<std::string> m_paths;
     std::string m_modes_directory;
     std::vector<std::string> m_sigma_names;

@@ -52,9 +52,10 @@ LinearImage BoxImage::mean() const
 class Collector::Source : public denoise::ForwardingSource {
 public:
     Source(denoise::FrameSource& inner, Collector& collector) : ForwardingSource(inner), m_collector(collector) {}
-    void read_rows(int frame_index, int row_begin, int row_end, float* destination) override
+    void read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                   denoise::PassThroughRows* pass_through) override
     {
-        m_inner.read_rows(frame_index, row_begin, row_end, destination);
+        m_inner.read_rows(frame_index, row_begin, row_end, destination, pass_through);
         m_collector.take_source_rows(frame_index, row_begin, row_end, destination);
     }
 
@@ -65,10 +66,11 @@ private:
 class Collector::Sink : public denoise::ForwardingSink {
 public:
     Sink(denoise::FrameSink& inner, Collector& collector) : ForwardingSink(inner), m_collector(collector) {}
-    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma) override
+    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma,
+                    const denoise::PassThroughRows* pass_through) override
     {
         m_collector.take_sink_rows(frame_index, row_begin, row_end, rebuilt, sigma);
-        m_inner.write_rows(frame_index, row_begin, row_end, rebuilt, sigma);
+        m_inner.write_rows(frame_index, row_begin, row_end, rebuilt, sigma, pass_through);
     }
 
 private:

@@ -17,29 +17,31 @@ RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& 
                                ? std::max(rank, std::min(rank + settings.rank_map.extra_modes, surveyed))
                                : rank;
     // With training frames the projection (A) and the rebuild (B) differ: training.h.
-    result.temporal =
-        training ? training->weights(basis, rank) : Eigen::MatrixXd(basis.temporal.leftCols(result.rebuild_modes));
-    const bool smooth = settings.weight_smoothing.enabled;  // --weight-smoothing: B smoothed, A kept
+    result.temporal = training ? training->weights(basis, rank)
+                               : Eigen::MatrixXd(basis.temporal.leftCols(result.rebuild_modes));
+    const bool smooth = settings.weight_smoothing.enabled; // --weight-smoothing: B smoothed, A kept
     if (smooth)
-        result.temporal = smooth_temporal_weights(result.temporal, settings.weight_smoothing, result.weight_smoothing);
+        result.temporal =
+            smooth_temporal_weights(result.temporal, settings.weight_smoothing, result.weight_smoothing);
     result.temporal_rank = result.temporal.leftCols(rank);
-    result.leverages =
-        training || smooth
-            ? training_leverages(training ? training->projector(basis, rank) : basis.temporal.leftCols(rank),
-                                 result.temporal_rank)
-            : lowrank::leverages(basis, rank);
+    result.leverages = training || smooth ? training_leverages(training ? training->projector(basis, rank)
+                                                                        : basis.temporal.leftCols(rank),
+                                                               result.temporal_rank)
+                                          : lowrank::leverages(basis, rank);
     if (settings.optimal_shrinkage)
         result.shrinkage = lowrank::optimal_shrinkage_factors(basis, noise_sigma, rank);
     result.projected = settings.mode_filter.enabled ? std::max(result.rebuild_modes, surveyed) : rank;
     result.temporal_projected =
         training ? training->projector(basis, result.projected) : basis.temporal.leftCols(result.projected);
-    result.output_modes = settings.mode_filter.enabled ? result.rebuild_modes : settings.optimal_shrinkage ? rank : 0;
+    result.output_modes = settings.mode_filter.enabled ? result.rebuild_modes
+                          : settings.optimal_shrinkage ? rank
+                                                       : 0;
     return result;
 }
 
 BandRebuilder::BandRebuilder(const Settings& settings, const ShotShape& shape, const RebuildBasis& modes,
-                             const ModeFilterOptions& filter_options, const ModeFilterPlan& plan, int surveyed,
-                             const FeatureGuide* features)
+                             const ModeFilterOptions& filter_options, const ModeFilterPlan& plan,
+                             int surveyed, const FeatureGuide* features)
     : m_settings(settings), m_shape(shape), m_modes(modes), m_filter_options(filter_options), m_plan(plan),
       m_surveyed(surveyed), m_features(features)
 {
@@ -68,7 +70,7 @@ void BandRebuilder::prepare(const Band& data, int row, int end, const lowrank::M
     const std::int64_t row_samples = static_cast<std::int64_t>(m_shape.width) * m_shape.channels;
     const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
     lowrank::BandView noisy = data.view(frames).view();
-    m_coefficients.resize(static_cast<size_t>(data.rows) * m_modes.projected);  // every value written below
+    m_coefficients.resize(static_cast<size_t>(data.rows) * m_modes.projected); // every value written below
     lowrank::MutableBandView coefficient_view{m_coefficients.data(), data.rows, m_modes.projected, data.rows};
     lowrank::project_coefficients(noisy, m_modes.temporal_projected, coefficient_view);
     if (residual) {
@@ -83,18 +85,18 @@ void BandRebuilder::prepare(const Band& data, int row, int end, const lowrank::M
     const std::int64_t rebuilt_stride = (residual_end - residual_begin) * row_samples;
     m_rebuilt.resize(static_cast<size_t>(rebuilt_stride) * frames);
     lowrank::rebuild_from_coefficients(
-        {m_coefficients.data() + residual_first, rebuilt_stride, m_modes.rank, data.rows}, m_modes.temporal_rank,
-        {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride});
+        {m_coefficients.data() + residual_first, rebuilt_stride, m_modes.rank, data.rows},
+        m_modes.temporal_rank, {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride});
     // The filter reads the noisy band, which the means may overwrite: it goes first.
     if (m_settings.mode_filter.enabled)
         filter(data, row, end, ranks);
     lowrank::ImageBandShape shape{m_shape.width, residual_end - residual_begin, m_shape.channels};
     m_noise_variance.resize(static_cast<size_t>(valid));
-    lowrank::residual_noise_variance({noisy.data + residual_first, rebuilt_stride, frames, noisy.frame_stride},
-                                     {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride}, shape, m_modes.rank,
-                                     row - residual_begin, end - residual_begin, m_confidence,
-                                     m_noise_variance.data(), means, means_stride);
-    for (size_t j = 0; j < m_modes.shrinkage.size(); ++j)  // --shrink optimal, the band's own rows
+    lowrank::residual_noise_variance(
+        {noisy.data + residual_first, rebuilt_stride, frames, noisy.frame_stride},
+        {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride}, shape, m_modes.rank, row - residual_begin,
+        end - residual_begin, m_confidence, m_noise_variance.data(), means, means_stride);
+    for (size_t j = 0; j < m_modes.shrinkage.size(); ++j) // --shrink optimal, the band's own rows
         for (std::int64_t i = 0; i < valid; ++i)
             m_coefficients[j * data.rows + offset + i] *= static_cast<float>(m_modes.shrinkage[j]);
 }
@@ -113,22 +115,23 @@ void BandRebuilder::filter(const Band& data, int row, int end, std::vector<float
     lowrank::BandView noisy = data.view(m_shape.frames).view();
     lowrank::BandView surveyed{m_coefficients.data(), data.rows, m_surveyed, data.rows};
     lowrank::ImageBandShape shape{m_shape.width, data.row_end - data.row_begin, m_shape.channels};
-    std::vector<float>& filtered = m_filtered;  // filter_coefficients writes every value
+    std::vector<float>& filtered = m_filtered; // filter_coefficients writes every value
     filtered.resize(static_cast<size_t>(valid) * modes);
     std::vector<float> noise_variance, features;
     coefficient_noise_variance(noisy, surveyed, shape, m_settings.mode_filter.noise_radius, noise_variance);
-    filter_coefficients(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin, m_plan, modes,
-                        {filtered.data(), valid, modes, valid}, m_gains, band_features(data, features));
+    filter_coefficients(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin, m_plan,
+                        modes, {filtered.data(), valid, modes, valid}, m_gains,
+                        band_features(data, features));
     const std::int64_t valid_pixels = valid / m_shape.channels;
     if (ranks) {
         std::vector<float> weights;
-        local_rank(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin, m_plan, m_modes.rank,
-                   modes, m_gains, m_settings.rank_map.radius, weights, *ranks);
+        local_rank(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin, m_plan,
+                   m_modes.rank, modes, m_gains, m_settings.rank_map.radius, weights, *ranks);
         for (int j = 0; j < modes; ++j)
             for (std::int64_t i = 0; i < valid; ++i) {
                 const float weight = weights[static_cast<size_t>(j * valid_pixels + i / m_shape.channels)];
                 filtered[static_cast<size_t>(j * valid + i)] *= weight;
-                if (i % m_shape.channels == 0)  // the kept noise of a scaled mode: w² · gain
+                if (i % m_shape.channels == 0) // the kept noise of a scaled mode: w² · gain
                     m_gains[static_cast<size_t>(j * valid_pixels + i / m_shape.channels)] *= weight * weight;
             }
     }
@@ -149,4 +152,4 @@ void BandRebuilder::kept_noise_of_frame(const Eigen::MatrixXd& temporal, int t, 
     }
 }
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

@@ -23,16 +23,16 @@ namespace modestack::denoise {
 
 /// The temporal matrices of pass 2.
 struct RebuildBasis {
-    int rank = 0;           ///< N
-    int rebuild_modes = 0;  ///< modes the outputs are rebuilt from (more than N with --rank-map)
-    int projected = 0;      ///< modes projected on (the mode filter's noise estimate needs its survey's)
-    int output_modes = 0;   ///< modes the outputs are rebuilt from changed coefficients (0: the unfiltered N)
-    Eigen::MatrixXd temporal;            ///< F × rebuild_modes: the rebuild weights (B, smoothed)
-    Eigen::MatrixXd temporal_rank;       ///< F × N of them: the unfiltered rebuild sigma's residual uses
-    Eigen::MatrixXd temporal_projected;  ///< F × projected: the projection (A)
-    Eigen::VectorXd leverages;           ///< h_t for sigma
-    std::vector<double> shrinkage;       ///< --shrink optimal: η(σ_j)/σ_j per kept mode (empty: none)
-    WeightSmoothingPlan weight_smoothing;  ///< what --weight-smoothing did per kept mode
+    int rank = 0;          ///< N
+    int rebuild_modes = 0; ///< modes the outputs are rebuilt from (more than N with --rank-map)
+    int projected = 0;     ///< modes projected on (the mode filter's noise estimate needs its survey's)
+    int output_modes = 0;  ///< modes the outputs are rebuilt from changed coefficients (0: the unfiltered N)
+    Eigen::MatrixXd temporal;             ///< F × rebuild_modes: the rebuild weights (B, smoothed)
+    Eigen::MatrixXd temporal_rank;        ///< F × N of them: the unfiltered rebuild sigma's residual uses
+    Eigen::MatrixXd temporal_projected;   ///< F × projected: the projection (A)
+    Eigen::VectorXd leverages;            ///< h_t for sigma
+    std::vector<double> shrinkage;        ///< --shrink optimal: η(σ_j)/σ_j per kept mode (empty: none)
+    WeightSmoothingPlan weight_smoothing; ///< what --weight-smoothing did per kept mode
 };
 
 /// The matrices for N = `rank` modes of `basis`; `surveyed` modes the mode filter
@@ -91,11 +91,11 @@ private:
     int m_surveyed;
     const FeatureGuide* m_features;
     lowrank::ConfidenceOptions m_confidence;
-    std::vector<float> m_filtered;        // the filter's output
-    ScratchBuffer<float> m_coefficients;  // [mode][sample] of the band with its halo
-    ScratchBuffer<float> m_rebuilt;       // [frame][sample] of sigma_rows()
-    std::vector<float> m_noise_variance;  // sigma's s² of the valid rows
-    std::vector<float> m_gains;           // kept-noise gain per valid pixel and mode
+    std::vector<float> m_filtered;       // the filter's output
+    ScratchBuffer<float> m_coefficients; // [mode][sample] of the band with its halo
+    ScratchBuffer<float> m_rebuilt;      // [frame][sample] of sigma_rows()
+    std::vector<float> m_noise_variance; // sigma's s² of the valid rows
+    std::vector<float> m_gains;          // kept-noise gain per valid pixel and mode
 };
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

@@ -11,9 +11,12 @@ namespace modestack::denoise {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+double seconds_since(Clock::time_point start)
+{
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
-}  // namespace
+} // namespace
 
 Solver parse_solver(const std::string& name)
 {
@@ -29,9 +32,12 @@ Solver parse_solver(const std::string& name)
 std::string solver_name(Solver solver)
 {
     switch (solver) {
-    case Solver::Gram: return "gram";
-    case Solver::RandomizedSvd: return "rsvd";
-    default: return "auto";
+    case Solver::Gram:
+        return "gram";
+    case Solver::RandomizedSvd:
+        return "rsvd";
+    default:
+        return "auto";
     }
 }
 
@@ -68,9 +74,9 @@ Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& setting
     report.rank = survey.rank;
     report.mode_filter = survey.plan;
     describe_solution(settings, shape, solution, survey.rank.rank, report);
-    const RebuildBasis modes = make_rebuild_basis(settings, solution.basis, survey.rank.rank, survey.modes,
-                                                  solution.training ? &*solution.training : nullptr,
-                                                  survey.rank.noise_sigma);
+    const RebuildBasis modes =
+        make_rebuild_basis(settings, solution.basis, survey.rank.rank, survey.modes,
+                           solution.training ? &*solution.training : nullptr, survey.rank.noise_sigma);
     report.shrinkage = modes.shrinkage;
     report.weight_smoothing = modes.weight_smoothing;
     report.seconds_solve = seconds_since(start) - report.seconds_filter_survey + solution.seconds;
@@ -85,4 +91,4 @@ Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& setting
     return report;
 }
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

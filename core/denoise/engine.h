@@ -43,9 +43,9 @@ std::string solver_name(Solver solver);
 /// Every setting of a denoise run.
 struct Settings {
     Solver solver = Solver::Auto;
-    lowrank::RankRuleOptions rank;  ///< rule (default press) or fixed N
+    lowrank::RankRuleOptions rank; ///< rule (default press) or fixed N
     lowrank::OutlierOptions outliers;
-    int sigma_radius = 2;  ///< spatial pooling radius of the sigma estimate (pixels)
+    int sigma_radius = 2; ///< spatial pooling radius of the sigma estimate (pixels)
     std::int64_t max_memory_bytes = std::int64_t(2) << 30;
     /// Randomized SVD: modes computed (the rank rule chooses among them).
     int randomized_modes = 24;
@@ -88,24 +88,24 @@ struct Report {
     ShotShape shape;
     BandPlan plan;
     std::string solver;
-    int passes = 0;                       ///< reads of the whole shot
+    int passes = 0; ///< reads of the whole shot
     lowrank::RankDecision rank;
-    std::vector<double> singular_values;  ///< σ_j, descending
-    std::vector<double> explained;        ///< σ_j² / total energy, per mode
-    std::vector<std::vector<double>> temporal_modes;  ///< pt(t, j) for j < N: [j][t]
+    std::vector<double> singular_values;             ///< σ_j, descending
+    std::vector<double> explained;                   ///< σ_j² / total energy, per mode
+    std::vector<std::vector<double>> temporal_modes; ///< pt(t, j) for j < N: [j][t]
     /// pt(t, j) beyond N for the report's rank slider (Settings::report_modes): [j][t].
     std::vector<std::vector<double>> preview_temporal_modes;
     lowrank::OutlierCounts outliers;
-    ModeFilterPlan mode_filter;     ///< per-mode filters and SURE (empty when off)
-    FeatureGuideSummary feature_guide;  ///< the features that guided it (empty: none)
-    NonNegativeCounts non_negative;      ///< what --non-negative changed
-    std::vector<double> shrinkage;       ///< per kept mode η(σ_j)/σ_j (empty: hard truncation)
-    RankMapSummary rank_map;             ///< the per-pixel ranks (largest_rank 0: no map)
-    WeightSmoothingPlan weight_smoothing;  ///< what --weight-smoothing did per kept mode
-    double seconds_filter_survey = 0;  ///< the mode filter's SURE pass
-    double seconds_statistics = 0;  ///< pass 1 (read + clean + Gram)
-    double seconds_solve = 0;       ///< eigensolve or randomized SVD, and the rank rule
-    double seconds_rebuild = 0;     ///< pass 2 (read + rebuild + sigma + write)
+    ModeFilterPlan mode_filter;           ///< per-mode filters and SURE (empty when off)
+    FeatureGuideSummary feature_guide;    ///< the features that guided it (empty: none)
+    NonNegativeCounts non_negative;       ///< what --non-negative changed
+    std::vector<double> shrinkage;        ///< per kept mode η(σ_j)/σ_j (empty: hard truncation)
+    RankMapSummary rank_map;              ///< the per-pixel ranks (largest_rank 0: no map)
+    WeightSmoothingPlan weight_smoothing; ///< what --weight-smoothing did per kept mode
+    double seconds_filter_survey = 0;     ///< the mode filter's SURE pass
+    double seconds_statistics = 0;        ///< pass 1 (read + clean + Gram)
+    double seconds_solve = 0;             ///< eigensolve or randomized SVD, and the rank rule
+    double seconds_rebuild = 0;           ///< pass 2 (read + rebuild + sigma + write)
 };
 
 /// Denoises `source` into `sink`: every pass of passes.h in order. Throws
@@ -113,4 +113,4 @@ struct Report {
 /// too small) and cancellation.
 Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& settings, Progress& progress);
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

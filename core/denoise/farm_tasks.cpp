@@ -17,17 +17,22 @@ namespace modestack::denoise {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+double seconds_since(Clock::time_point start)
+{
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
 // What no farm task can do (each needs the whole shot in one process).
 void check_task(const Settings& settings, Stage stage)
 {
     const std::string name = stage_name(stage);
     if (settings.solver == Solver::RandomizedSvd)
-        throw usage_error(fmt::format("--stage {}: the farm stages use the gram solver, not --method rsvd", name));
+        throw usage_error(
+            fmt::format("--stage {}: the farm stages use the gram solver, not --method rsvd", name));
     if (!settings.training_frames.empty())
         throw usage_error(fmt::format("--stage {} cannot be combined with --train-frames", name));
-    if (stage != Stage::Statistics && stage != Stage::Solve && settings.non_negative == NonNegativeMode::KeepSum)
+    if (stage != Stage::Statistics && stage != Stage::Solve &&
+        settings.non_negative == NonNegativeMode::KeepSum)
         throw usage_error(fmt::format("--stage {} cannot be combined with --non-negative-mode keep-sum: it "
                                       "needs every frame of a pixel; use clamp or run on one machine",
                                       name));
@@ -63,8 +68,8 @@ struct Solved {
     RebuildBasis modes;
 };
 
-Solved solved_from(const PassContext& context, const RunPlan& plan, const SolvedSums& solved, const SurveyRows& survey,
-                   Report& report)
+Solved solved_from(const PassContext& context, const RunPlan& plan, const SolvedSums& solved,
+                   const SurveyRows& survey, Report& report)
 {
     const ShotShape shape = context.source.shape();
     Solved result{solution_from_gram(context.settings, solved.gram), {}, {}};
@@ -79,14 +84,14 @@ Solved solved_from(const PassContext& context, const RunPlan& plan, const Solved
     report.rank = result.survey.rank;
     report.mode_filter = result.survey.plan;
     describe_solution(context.settings, shape, result.solution, report.rank.rank, report);
-    result.modes = make_rebuild_basis(context.settings, result.solution.basis, report.rank.rank, result.survey.modes,
-                                      nullptr, report.rank.noise_sigma);
+    result.modes = make_rebuild_basis(context.settings, result.solution.basis, report.rank.rank,
+                                      result.survey.modes, nullptr, report.rank.noise_sigma);
     report.shrinkage = result.modes.shrinkage;
     report.weight_smoothing = result.modes.weight_smoothing;
     return result;
 }
 
-}  // namespace
+} // namespace
 
 TaskResult<Statistics> statistics_task(const PassContext& context, int row_begin, int row_end)
 {
@@ -118,7 +123,8 @@ TaskResult<SolvedSums> solve_task(const PassContext& context, const Statistics& 
     return result;
 }
 
-TaskResult<SurveyRows> survey_task(const PassContext& context, const SolvedSums& solved, int row_begin, int row_end)
+TaskResult<SurveyRows> survey_task(const PassContext& context, const SolvedSums& solved, int row_begin,
+                                   int row_end)
 {
     TaskResult<SurveyRows> result;
     const RunPlan plan = plan_task(context, Stage::Survey, result.report, row_begin, row_end);
@@ -134,15 +140,16 @@ TaskResult<SurveyRows> survey_task(const PassContext& context, const SolvedSums&
         result.output.sums = survey_rows(context, stream, plan, solution, row_begin, row_end, true);
         result.report.passes = stream.passes();
         result.report.seconds_filter_survey = seconds_since(survey_start);
-    } else {  // nothing to survey: the task reports the modes as the solve did
+    } else { // nothing to survey: the task reports the modes as the solve did
         describe_solution(context.settings, result.report.shape, solution, solution.rank.rank, result.report);
     }
-    result.report.seconds_solve = seconds_since(start) - result.report.seconds_filter_survey + solution.seconds;
+    result.report.seconds_solve =
+        seconds_since(start) - result.report.seconds_filter_survey + solution.seconds;
     return result;
 }
 
-TaskResult<ModeImages> modes_task(const PassContext& context, const SolvedSums& solved, const SurveyRows& survey,
-                                  int row_begin, int row_end)
+TaskResult<ModeImages> modes_task(const PassContext& context, const SolvedSums& solved,
+                                  const SurveyRows& survey, int row_begin, int row_end)
 {
     TaskResult<ModeImages> result;
     Report& report = result.report;
@@ -211,7 +218,8 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     const Settings& settings = context.settings;
     const RebuildBasis& modes = modes_of.modes;
     const auto start = Clock::now();
-    BandRebuilder rebuilder(settings, shape, modes, plan.filter, modes_of.survey.plan, modes_of.survey.modes, nullptr);
+    BandRebuilder rebuilder(settings, shape, modes, plan.filter, modes_of.survey.plan, modes_of.survey.modes,
+                            nullptr);
     const ShotModes shot = join_modes_bands(bands, shape, modes.rank, modes.output_modes,
                                             settings.mode_filter.enabled ? modes.rebuild_modes : 0);
     std::vector<int> written;
@@ -227,6 +235,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                            static_cast<std::int64_t>(written.size()));
     struct Buffers {
         std::vector<float> noisy, unfiltered, kept_noise, sigma, output;
+        PassThroughRows pass_through;
     };
     tbb::enumerable_thread_specific<Buffers> thread_buffers;
     std::mutex counts_mutex;
@@ -237,11 +246,12 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
         for (std::vector<float>* buffer :
              {&buffers.noisy, &buffers.unfiltered, &buffers.kept_noise, &buffers.sigma, &buffers.output})
             buffer->resize(static_cast<size_t>(samples));
-        context.source.read_rows(t, 0, shape.height, buffers.noisy.data());
+        context.source.read_rows(t, 0, shape.height, buffers.noisy.data(), &buffers.pass_through);
         for (const ModeImages::Patch& patch : shot.patches[static_cast<size_t>(t)])
             buffers.noisy[static_cast<size_t>(patch.sample)] = patch.value;
         lowrank::rebuild_from_coefficients({shot.residual.data(), samples, shot.residual_modes, samples},
-                                           modes.temporal_rank.row(t), {buffers.unfiltered.data(), samples, 1, samples});
+                                           modes.temporal_rank.row(t),
+                                           {buffers.unfiltered.data(), samples, 1, samples});
         if (shot.gain_modes > 0)
             rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
                                           buffers.kept_noise.data());
@@ -252,13 +262,14 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
         if (shot.output_modes > 0)
             lowrank::rebuild_from_coefficients({shot.output.data(), samples, shot.output_modes, samples},
                                                output_temporal.row(t), {output.data(), samples, 1, samples});
-        const NonNegativeCounts counts =
-            make_non_negative({output.data(), samples, 1, samples}, settings.non_negative, settings.non_negative_floor);
+        const NonNegativeCounts counts = make_non_negative(
+            {output.data(), samples, 1, samples}, settings.non_negative, settings.non_negative_floor);
         {
             std::lock_guard<std::mutex> lock(counts_mutex);
             report.non_negative += counts;
         }
-        context.sink.write_rows(t, 0, shape.height, output.data(), buffers.sigma.data());
+        context.sink.write_rows(t, 0, shape.height, output.data(), buffers.sigma.data(),
+                                &buffers.pass_through);
         context.progress.advance(1);
     });
     context.progress.end();
@@ -266,4 +277,4 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     return report;
 }
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

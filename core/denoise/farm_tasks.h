@@ -24,16 +24,17 @@ TaskResult<Statistics> statistics_task(const PassContext& context, int row_begin
 TaskResult<SolvedSums> solve_task(const PassContext& context, const Statistics& shot);
 
 /// The mode filter's survey of rows [row_begin, row_end).
-TaskResult<SurveyRows> survey_task(const PassContext& context, const SolvedSums& solved, int row_begin, int row_end);
+TaskResult<SurveyRows> survey_task(const PassContext& context, const SolvedSums& solved, int row_begin,
+                                   int row_end);
 
 /// Pass 2 over rows [row_begin, row_end) up to the frames: their mode images.
 /// `survey`: every row's sums (empty without the mode filter).
-TaskResult<ModeImages> modes_task(const PassContext& context, const SolvedSums& solved, const SurveyRows& survey,
-                                  int row_begin, int row_end);
+TaskResult<ModeImages> modes_task(const PassContext& context, const SolvedSums& solved,
+                                  const SurveyRows& survey, int row_begin, int row_end);
 
 /// The outputs of the frames the sink writes, each read alone and rebuilt from
 /// every band's mode images (`bands`, row order).
 Report write_task(const PassContext& context, const SolvedSums& solved, const SurveyRows& survey,
                   const std::vector<ModeImages>& bands);
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

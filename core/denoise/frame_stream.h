@@ -5,8 +5,10 @@
 // SequenceReader and FrameOutput to them; tests use plain memory.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <string>
+#include <vector>
 
 namespace modestack::denoise {
 
@@ -27,16 +29,37 @@ enum class Auxiliary {
     Depth,     ///< camera distance (`Depth`)
 };
 
+/// A frame's other channels (those an output copies unchanged) for some rows,
+/// as the source decoded them beside the selected ones. Opaque to the engine:
+/// pass 2 hands each band's on from its read to the write of the same rows, so
+/// the sink decodes nothing twice and needs no way back into the source.
+struct PassThroughRows {
+    int row_begin = 0;
+    int row_end = 0;
+    std::vector<unsigned char> bytes; ///< empty: none kept (the sink decodes what it needs)
+
+    /// The bytes of rows [begin, end) (`row_bytes` per row), or null unless all of them are kept.
+    const unsigned char* rows(int begin, int end, std::size_t row_bytes) const
+    {
+        if (bytes.empty() || begin < row_begin || end > row_end)
+            return nullptr;
+        return bytes.data() + row_bytes * static_cast<std::size_t>(begin - row_begin);
+    }
+};
+
 /// Rows of the selected channels of a shot.
 class FrameSource {
 public:
     virtual ~FrameSource() = default;
     virtual ShotShape shape() const = 0;
     /// Reads rows [row_begin, row_end) of frame `frame_index` as float,
-    /// interleaved [row][x][channel]. Called concurrently for different frames.
-    virtual void read_rows(int frame_index, int row_begin, int row_end, float* destination) = 0;
-    /// Bytes the source itself keeps per image row of a streamed band, all frames
-    /// together (e.g. decoded rows it hands to the sink), for the memory plan.
+    /// interleaved [row][x][channel]. With `pass_through` (pass 2's reads), the
+    /// source may also leave there the frame's other channels of those rows, for
+    /// the sink's write of the same rows. Called concurrently for different frames.
+    virtual void read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                           PassThroughRows* pass_through) = 0;
+    /// Bytes of PassThroughRows per image row of a streamed band, all frames
+    /// together, for the memory plan.
     virtual std::int64_t band_bytes_per_row() const { return 0; }
     /// Channels per pixel of `kind` (0: the input has none; Variance has one per
     /// selected channel).
@@ -60,9 +83,10 @@ class ForwardingSource : public FrameSource {
 public:
     explicit ForwardingSource(FrameSource& inner) : m_inner(inner) {}
     ShotShape shape() const override { return m_inner.shape(); }
-    void read_rows(int frame_index, int row_begin, int row_end, float* destination) override
+    void read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                   PassThroughRows* pass_through) override
     {
-        m_inner.read_rows(frame_index, row_begin, row_end, destination);
+        m_inner.read_rows(frame_index, row_begin, row_end, destination, pass_through);
     }
     std::int64_t band_bytes_per_row() const override { return m_inner.band_bytes_per_row(); }
     int auxiliary_channels(Auxiliary kind) const override { return m_inner.auxiliary_channels(kind); }
@@ -89,10 +113,12 @@ public:
     /// Called once, after the modes and N are known and before any write.
     virtual void begin(const RebuildStart& start) { (void)start; }
     /// Rows [row_begin, row_end) of frame `frame_index`: the rebuilt values and
-    /// their standard error, both laid out like the source's rows. Called
-    /// concurrently for different frames, never for the same frame at once.
+    /// their standard error, both laid out like the source's rows, and what the
+    /// source's read of these rows kept of the other channels (null or empty:
+    /// nothing). Called concurrently for different frames, never for the same
+    /// frame at once.
     virtual void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
-                            const float* sigma) = 0;
+                            const float* sigma, const PassThroughRows* pass_through) = 0;
     /// Rows of the spatial modes ps(x, y, j) (j < modes), [mode][row][x][channel].
     /// Only called when the sink asks for modes.
     virtual void write_mode_rows(int row_begin, int row_end, int modes, const float* spatial_modes)
@@ -121,9 +147,10 @@ class ForwardingSink : public FrameSink {
 public:
     explicit ForwardingSink(FrameSink& inner) : m_inner(inner) {}
     void begin(const RebuildStart& start) override { m_inner.begin(start); }
-    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma) override
+    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma,
+                    const PassThroughRows* pass_through) override
     {
-        m_inner.write_rows(frame_index, row_begin, row_end, rebuilt, sigma);
+        m_inner.write_rows(frame_index, row_begin, row_end, rebuilt, sigma, pass_through);
     }
     void write_mode_rows(int row_begin, int row_end, int modes, const float* spatial_modes) override
     {

@@ -29,8 +29,8 @@ struct PassContext {
 struct RunPlan {
     BandPlan bands;
     Solver solver = Solver::Gram;
-    ModeFilterOptions filter;               ///< the settings' with the feature channels found
-    std::optional<FeatureGuide> features;   ///< the mode filter's feature guide (none: unguided)
+    ModeFilterOptions filter;             ///< the settings' with the feature channels found
+    std::optional<FeatureGuide> features; ///< the mode filter's feature guide (none: unguided)
 };
 
 /// Throws a usage error for settings that do not fit the shot (too few frames,
@@ -41,19 +41,18 @@ void check_settings(const Settings& settings, const ShotShape& shape);
 /// open the mode filter's feature guide (a run or task that filters).
 RunPlan plan_run(const PassContext& context, bool with_features);
 
-
 /// The temporal modes and N.
 struct Solution {
     lowrank::Basis basis;
     lowrank::RankDecision rank;
-    std::optional<TrainingGram> training;  ///< --train-frames: the projection and the rebuild differ
-    double seconds = 0;                    ///< the eigensolve or randomized SVD
+    std::optional<TrainingGram> training; ///< --train-frames: the projection and the rebuild differ
+    double seconds = 0;                   ///< the eigensolve or randomized SVD
 };
 
 /// The mode filter's choice: a filter per mode and N (its SURE choice for auto
 /// N; without the mode filter, the solution's).
 struct Survey {
-    int modes = 0;  ///< modes surveyed (0: no mode filter)
+    int modes = 0; ///< modes surveyed (0: no mode filter)
     ModeFilterPlan plan;
     lowrank::RankDecision rank;
 };
@@ -75,12 +74,13 @@ int survey_modes(const Settings& settings, const ShotShape& shape, const lowrank
 /// The survey's sums of image rows [row_begin, row_end) (SureSurvey::row_sums):
 /// the kept shot or bands with their halo of a whole run, or (`task`) bands read
 /// by a farm task.
-std::vector<std::vector<double>> survey_rows(const PassContext& context, ShotStream& stream, const RunPlan& plan,
-                                             const Solution& solution, int row_begin, int row_end, bool task);
+std::vector<std::vector<double>> survey_rows(const PassContext& context, ShotStream& stream,
+                                             const RunPlan& plan, const Solution& solution, int row_begin,
+                                             int row_end, bool task);
 
 /// The filters and (auto N) N from the sums of every row.
-Survey finish_survey(const Settings& settings, const ShotShape& shape, const RunPlan& plan, const Solution& solution,
-                     std::vector<std::vector<double>> rows);
+Survey finish_survey(const Settings& settings, const ShotShape& shape, const RunPlan& plan,
+                     const Solution& solution, std::vector<std::vector<double>> rows);
 /// Without the mode filter: N as the solution chose it.
 Survey unfiltered_survey(const Solution& solution);
 
@@ -99,4 +99,4 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
 void describe_solution(const Settings& settings, const ShotShape& shape, const Solution& solution, int rank,
                        Report& report);
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

@@ -14,7 +14,8 @@ namespace {
 
 // Spatial modes ps(x, y, j) = coefficient_j / σ_j of rows [row, end), for inspection ([0048]).
 void write_spatial_modes(FrameSink& sink, const ShotShape& shape, const ScratchBuffer<float>& coefficients,
-                         const Band& data, const Solution& solution, int rank, int row, int end, std::int64_t offset)
+                         const Band& data, const Solution& solution, int rank, int row, int end,
+                         std::int64_t offset)
 {
     const std::int64_t samples = static_cast<std::int64_t>(shape.width) * (end - row) * shape.channels;
     std::vector<float> modes(static_cast<size_t>(samples) * rank);
@@ -27,7 +28,7 @@ void write_spatial_modes(FrameSink& sink, const ShotShape& shape, const ScratchB
     sink.write_mode_rows(row, end, rank, modes.data());
 }
 
-}  // namespace
+} // namespace
 
 RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const RunPlan& plan,
                            const Solution& solution, const Survey& survey, const RebuildBasis& modes)
@@ -42,7 +43,7 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
                             plan.features ? &*plan.features : nullptr);
     RebuildReport report;
 
-    const bool kept = plan.bands.in_memory;  // pass 2 reuses the kept shot: no second read
+    const bool kept = plan.bands.in_memory; // pass 2 reuses the kept shot: no second read
     stream.ensure_whole_shot();
     if (!kept)
         stream.count_pass();
@@ -53,12 +54,12 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
     Band band;
     // Reused from band to band: fresh buffers of this size cost the kernel's page
     // zeroing every band (7.5 % of a 1080p run's time).
-    ScratchBuffer<float> kept_sigma;  // sigma_from_mean writes every value
-    tbb::enumerable_thread_specific<std::vector<float>> kept_noise_of_worker;  // one frame's
+    ScratchBuffer<float> kept_sigma; // sigma_from_mean writes every value
+    tbb::enumerable_thread_specific<std::vector<float>> kept_noise_of_worker; // one frame's
     std::vector<float> ranks;
     for (int row = 0; row < shape.height; row += plan.bands.band_rows) {
         const int end = std::min(shape.height, row + plan.bands.band_rows);
-        Band& data = stream.band_with_halo(band, row, end);
+        Band& data = stream.band_with_halo(band, row, end, true);
         throw_if_cancelled();
         const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
         // Sigma of the band's own rows: prepare leaves each frame's windowed
@@ -78,32 +79,38 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
         // rebuilt() holds the unfiltered rebuild of sigma's rows; the output goes over its valid ones.
         const auto [residual_begin, residual_end] = rebuilder.sigma_rows(data, row, end);
         const std::int64_t rebuilt_stride = (residual_end - residual_begin) * row_samples;
-        const lowrank::ImageBandShape residual_shape{shape.width, residual_end - residual_begin, shape.channels};
+        const lowrank::ImageBandShape residual_shape{shape.width, residual_end - residual_begin,
+                                                     shape.channels};
         const int first_valid = row - residual_begin, last_valid = end - residual_begin;
         tbb::parallel_for(0, frames, [&](int t) {
-            std::vector<float>& kept_noise = kept_noise_of_worker.local();  // nothing below runs in parallel
+            std::vector<float>& kept_noise = kept_noise_of_worker.local(); // nothing below runs in parallel
             if (filter) {
                 kept_noise.resize(static_cast<size_t>(valid));
-                rebuilder.kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes, rebuilder.gains().data(), valid,
-                                              kept_noise.data());
+                rebuilder.kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes,
+                                              rebuilder.gains().data(), valid, kept_noise.data());
             }
             lowrank::sigma_from_mean(residual_shape, first_valid, last_valid, rebuilder.confidence(),
                                      rebuilder.noise_variance().data(), modes.leverages(t),
                                      filter ? kept_noise.data() : nullptr, sigma + t * sigma_stride);
         });
-        lowrank::MutableBandView output_view{rebuilder.rebuilt().data() + (row - residual_begin) * row_samples, valid,
-                                             frames, rebuilt_stride};
-        if (output > 0)  // the band's own rows from the changed coefficients
-            lowrank::rebuild_from_coefficients({rebuilder.coefficients().data() + offset, valid, output, data.rows},
-                                               modes.temporal.leftCols(output), output_view);
-        report.non_negative += make_non_negative(output_view, settings.non_negative, settings.non_negative_floor);
+        lowrank::MutableBandView output_view{
+            rebuilder.rebuilt().data() + (row - residual_begin) * row_samples, valid, frames, rebuilt_stride};
+        if (output > 0) // the band's own rows from the changed coefficients
+            lowrank::rebuild_from_coefficients(
+                {rebuilder.coefficients().data() + offset, valid, output, data.rows},
+                modes.temporal.leftCols(output), output_view);
+        report.non_negative +=
+            make_non_negative(output_view, settings.non_negative, settings.non_negative_floor);
 
-        tbb::parallel_for(0, frames, [&](int frame) {
-            context.sink.write_rows(frame, row, end, output_view.data + frame * output_view.frame_stride,
-                                    sigma + frame * sigma_stride);
+        tbb::parallel_for(0, frames, [&](int frame) { // a window of the kept shot has no pass-through rows
+            context.sink.write_rows(
+                frame, row, end, output_view.data + frame * output_view.frame_stride,
+                sigma + frame * sigma_stride,
+                data.pass_through.empty() ? nullptr : &data.pass_through[static_cast<size_t>(frame)]);
         });
         if (context.sink.wants_modes())
-            write_spatial_modes(context.sink, shape, rebuilder.coefficients(), data, solution, rank, row, end, offset);
+            write_spatial_modes(context.sink, shape, rebuilder.coefficients(), data, solution, rank, row, end,
+                                offset);
         if (rank_map) {
             context.sink.write_rank_rows(row, end, ranks.data());
             report.rank_map.add(ranks);
@@ -116,4 +123,4 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
     return report;
 }
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

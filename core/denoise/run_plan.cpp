@@ -18,7 +18,7 @@ namespace {
 // filter_weights.cpp.
 constexpr int kGuideImages = 4;
 
-}  // namespace
+} // namespace
 
 void check_settings(const Settings& settings, const ShotShape& shape)
 {
@@ -35,7 +35,8 @@ void check_settings(const Settings& settings, const ShotShape& shape)
     if (settings.rank_map.enabled && !settings.mode_filter.enabled)
         throw usage_error("--rank-map needs the mode filter: the local estimates use its noise and filters");
     if (settings.optimal_shrinkage && settings.mode_filter.enabled)
-        throw usage_error("--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
+        throw usage_error(
+            "--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
     if (!settings.training_frames.empty())
         check_training_frames(settings, shape.frames);
     if (settings.whitening &&
@@ -48,13 +49,13 @@ RunPlan plan_run(const PassContext& context, bool with_features)
     const Settings& settings = context.settings;
     const ShotShape shape = context.source.shape();
     RunPlan plan;
-    const int largest_rank =
-        settings.rank.rule == lowrank::RankRule::Fixed ? settings.rank.fixed_rank : std::min(shape.frames - 1, 32);
+    const int largest_rank = settings.rank.rule == lowrank::RankRule::Fixed ? settings.rank.fixed_rank
+                                                                            : std::min(shape.frames - 1, 32);
     // Sigma's window reads radius + 1 rows around a pixel (see confidence.h); the
     // mode filter reads its kernel and guide around a pixel.
     PassNeeds needs;
     needs.halo_rows = needs.sigma_halo_rows = settings.sigma_radius + 1;
-    needs.halo_images = largest_rank;  // the projected coefficients
+    needs.halo_images = largest_rank; // the projected coefficients
     needs.source_row_bytes = context.source.band_bytes_per_row();
     plan.filter = settings.mode_filter;
     if (settings.mode_filter.enabled) {
@@ -70,8 +71,8 @@ RunPlan plan_run(const PassContext& context, bool with_features)
         // noise per worker.
         const int surveyed = std::max(settings.mode_filter.max_modes, largest_rank);
         needs.survey_images = surveyed;
-        needs.halo_images =
-            surveyed + kGuideImages + 2 * ((plan.filter.feature_channels + shape.channels - 1) / shape.channels);
+        needs.halo_images = surveyed + kGuideImages +
+                            2 * ((plan.filter.feature_channels + shape.channels - 1) / shape.channels);
         needs.band_images = 2 * surveyed + tbb::this_task_arena::max_concurrency();
     }
     // Each worker's residual rows (double) of sigma's windows.
@@ -85,4 +86,4 @@ RunPlan plan_run(const PassContext& context, bool with_features)
     return plan;
 }
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

@@ -47,7 +47,7 @@ std::vector<double> block_means(FrameSource& source, int frame, int block)
     std::vector<float> band(static_cast<size_t>(shape.width) * block * shape.channels);
     for (int y0 = 0; y0 < shape.height; y0 += block) {
         const int y1 = std::min(shape.height, y0 + block);
-        source.read_rows(frame, y0, y1, band.data());
+        source.read_rows(frame, y0, y1, band.data(), nullptr);
         for (int y = y0; y < y1; ++y)
             for (int x = 0; x < shape.width; ++x)
                 for (int c = 0; c < shape.channels; ++c) {

@@ -60,9 +60,10 @@ class FrameRangeSource : public FrameSource {
 public:
     FrameRangeSource(FrameSource& inner, FrameSegment segment) : m_inner(inner), m_segment(segment) {}
     ShotShape shape() const override;
-    void read_rows(int frame_index, int row_begin, int row_end, float* destination) override
+    void read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                   PassThroughRows* pass_through) override
     {
-        m_inner.read_rows(m_segment.first + frame_index, row_begin, row_end, destination);
+        m_inner.read_rows(m_segment.first + frame_index, row_begin, row_end, destination, pass_through);
     }
     std::int64_t band_bytes_per_row() const override;
     int auxiliary_channels(Auxiliary kind) const override { return m_inner.auxiliary_channels(kind); }
@@ -89,10 +90,10 @@ public:
         if (m_forward_begin)
             m_inner.begin(start);
     }
-    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
-                    const float* sigma) override
+    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma,
+                    const PassThroughRows* pass_through) override
     {
-        m_inner.write_rows(m_segment.first + frame_index, row_begin, row_end, rebuilt, sigma);
+        m_inner.write_rows(m_segment.first + frame_index, row_begin, row_end, rebuilt, sigma, pass_through);
     }
 
 private:

@@ -10,7 +10,8 @@ namespace modestack::denoise {
 
 ShotStream::ShotStream(FrameSource& source, const lowrank::OutlierOptions& outliers, const BandPlan& plan,
                        Progress& progress)
-    : m_source(source), m_outlier_options(outliers), m_plan(plan), m_progress(progress), m_shape(source.shape())
+    : m_source(source), m_outlier_options(outliers), m_plan(plan), m_progress(progress),
+      m_shape(source.shape())
 {
 }
 
@@ -19,7 +20,7 @@ void ShotStream::begin_pass_progress()
     m_progress.begin(fmt::format("pass {}: reading {} frames", m_passes, m_shape.frames), m_shape.height);
 }
 
-void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning cleaning)
+void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning cleaning, bool with_pass_through)
 {
     throw_if_cancelled();
     band.row_begin = row_begin;
@@ -28,37 +29,46 @@ void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning clea
     band.stride = band.rows;
     band.storage.resize(static_cast<size_t>(band.rows) * m_shape.frames);
     band.data = band.storage.data();
+    if (with_pass_through)
+        band.pass_through.resize(static_cast<size_t>(m_shape.frames));
+    else
+        band.pass_through.clear();
     tbb::parallel_for(0, m_shape.frames, [&](int frame) {
-        m_source.read_rows(frame, row_begin, row_end, band.data + frame * band.rows);
+        m_source.read_rows(frame, row_begin, row_end, band.data + frame * band.rows,
+                           with_pass_through ? &band.pass_through[static_cast<size_t>(frame)] : nullptr);
     });
     const PatchRows patch_rows = m_patches;
-    std::vector<float> as_read;  // --stage modes: the patch rows as the files hold them
+    std::vector<float> as_read; // --stage modes: the patch rows as the files hold them
     const std::int64_t patch_first = (patch_rows.row_begin - row_begin) * row_samples();
     const std::int64_t patch_samples = (patch_rows.row_end - patch_rows.row_begin) * row_samples();
     if (patch_rows.patches) {
         as_read.resize(static_cast<size_t>(patch_samples) * m_shape.frames);
         for (int t = 0; t < m_shape.frames; ++t)
-            std::copy_n(band.data + t * band.rows + patch_first, patch_samples, as_read.begin() + t * patch_samples);
+            std::copy_n(band.data + t * band.rows + patch_first, patch_samples,
+                        as_read.begin() + t * patch_samples);
     }
     const std::int64_t first_sample = static_cast<std::int64_t>(row_begin) * row_samples();
-    if (cleaning == Cleaning::Again && m_cleaned_samples.empty()) {  // no counted read marked them: clean in full
+    if (cleaning == Cleaning::Again &&
+        m_cleaned_samples.empty()) { // no counted read marked them: clean in full
         lowrank::clean_outliers(band.view(m_shape.frames), m_outlier_options, nullptr);
     } else if (cleaning == Cleaning::Count) {
         std::uint8_t* marks =
             m_plan.in_memory || m_cleaned_samples.empty() ? nullptr : m_cleaned_samples.data() + first_sample;
-        const lowrank::OutlierCounts found = lowrank::clean_outliers(band.view(m_shape.frames), m_outlier_options, marks);
+        const lowrank::OutlierCounts found =
+            lowrank::clean_outliers(band.view(m_shape.frames), m_outlier_options, marks);
         m_outliers.non_finite += found.non_finite;
         m_outliers.fireflies += found.fireflies;
     } else {
         lowrank::clean_marked_outliers(band.view(m_shape.frames), m_outlier_options,
                                        m_cleaned_samples.data() + first_sample);
     }
-    if (patch_rows.patches) {  // bitwise, so that a replaced NaN counts too
+    if (patch_rows.patches) { // bitwise, so that a replaced NaN counts too
         const std::int64_t first = (patch_rows.row_begin - patch_rows.first_row) * row_samples();
         for (int t = 0; t < m_shape.frames; ++t)
             for (std::int64_t i = 0; i < patch_samples; ++i) {
                 const float cleaned = band.data[t * band.rows + patch_first + i];
-                if (std::memcmp(&cleaned, &as_read[static_cast<size_t>(t * patch_samples + i)], sizeof cleaned))
+                if (std::memcmp(&cleaned, &as_read[static_cast<size_t>(t * patch_samples + i)],
+                                sizeof cleaned))
                     patch_rows.patches->push_back({t, first + i, cleaned});
             }
     }
@@ -74,11 +84,12 @@ void ShotStream::ensure_whole_shot()
     m_progress.end();
 }
 
-Band& ShotStream::band_with_halo(Band& band, int row, int end)
+Band& ShotStream::band_with_halo(Band& band, int row, int end, bool with_pass_through)
 {
-    const int begin = std::max(0, row - m_plan.halo_rows), stop = std::min(m_shape.height, end + m_plan.halo_rows);
+    const int begin = std::max(0, row - m_plan.halo_rows),
+              stop = std::min(m_shape.height, end + m_plan.halo_rows);
     if (!m_plan.in_memory) {
-        read_band(band, begin, stop, Cleaning::Again);
+        read_band(band, begin, stop, Cleaning::Again, with_pass_through);
         return band;
     }
     band.row_begin = begin;
@@ -96,4 +107,4 @@ Band& ShotStream::read_task_band(Band& band, int row, int end)
     return band;
 }
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

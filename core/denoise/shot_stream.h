@@ -24,10 +24,13 @@ namespace modestack::denoise {
 struct Band {
     int row_begin = 0;
     int row_end = 0;
-    std::int64_t rows = 0;    ///< samples per frame: width * (row_end - row_begin) * channels
-    std::int64_t stride = 0;  ///< samples from one frame to the next
+    std::int64_t rows = 0;   ///< samples per frame: width * (row_end - row_begin) * channels
+    std::int64_t stride = 0; ///< samples from one frame to the next
     float* data = nullptr;
-    ScratchBuffer<float> storage;  ///< read_band writes every sample
+    ScratchBuffer<float> storage; ///< read_band writes every sample
+    /// Per frame, the other channels of these rows when the read kept them (pass 2
+    /// of a streamed shot), for the sink's write of the same rows; empty: none.
+    std::vector<PassThroughRows> pass_through;
 
     lowrank::MutableBandView view(int frames) const { return {data, rows, frames, stride}; }
 };
@@ -80,8 +83,9 @@ public:
     /// The kept shot, read and cleaned now when no earlier pass read it (a farm task).
     void ensure_whole_shot();
     /// Rows [row, end) of every frame with the plan's halo rows around them: a
-    /// window into the kept shot, or read into `band`.
-    Band& band_with_halo(Band& band, int row, int end);
+    /// window into the kept shot, or read into `band` (`with_pass_through`: with
+    /// each frame's other channels, for the writes of pass 2).
+    Band& band_with_halo(Band& band, int row, int end, bool with_pass_through);
     /// A farm task's band: rows [row, end) with the plan's halo rows around them,
     /// read from the source (never the whole shot), cleaned in full.
     Band& read_task_band(Band& band, int row, int end);
@@ -94,11 +98,13 @@ public:
     }
 
     enum class Cleaning {
-        Count,  ///< the first read of the rows: clean, count and (streamed) mark
-        Again,  ///< a later read: redo the marked samples, or everything when no read marked them (a farm task)
+        Count, ///< the first read of the rows: clean, count and (streamed) mark
+        Again, ///< a later read: redo the marked samples, or everything when no read marked them (a farm
+               ///< task)
     };
-    /// Reads rows [row_begin, row_end) of every frame (frames in parallel) into `band` and cleans them.
-    void read_band(Band& band, int row_begin, int row_end, Cleaning cleaning);
+    /// Reads rows [row_begin, row_end) of every frame (frames in parallel) into
+    /// `band` and cleans them; `with_pass_through`: band.pass_through too.
+    void read_band(Band& band, int row_begin, int row_end, Cleaning cleaning, bool with_pass_through = false);
 
 private:
     void begin_pass_progress();
@@ -110,7 +116,7 @@ private:
     ShotShape m_shape;
     int m_passes = 0;
     lowrank::OutlierCounts m_outliers;
-    Band m_whole;  // the kept shot, when it fits in memory
+    Band m_whole; // the kept shot, when it fits in memory
     // Streaming: 1 for each sample whose row (over frames) the outlier cleaning changed.
     std::vector<std::uint8_t> m_cleaned_samples;
     struct PatchRows {
@@ -119,4 +125,4 @@ private:
     } m_patches;
 };
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

@@ -14,7 +14,10 @@ namespace modestack::denoise {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+double seconds_since(Clock::time_point start)
+{
+    return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
 // Feeds a band to `add(first image row, chunk)` in fixed chunks of kChunkRows
 // image rows, so the summation order does not depend on the band height.
@@ -42,32 +45,35 @@ void visit_whitened(const Settings& settings, const ShotShape& shape, const Band
     }
     const std::vector<float>& weights = *settings.whitening;
     const std::int64_t row_samples = static_cast<std::int64_t>(shape.width) * shape.channels;
-    const std::int64_t chunk_first = static_cast<std::int64_t>(band.row_begin) * row_samples + (chunk.data - band.data);
+    const std::int64_t chunk_first =
+        static_cast<std::int64_t>(band.row_begin) * row_samples + (chunk.data - band.data);
     scratch.resize(static_cast<size_t>(row_samples) * shape.frames);
     for (std::int64_t begin = 0; begin < chunk.rows; begin += row_samples) {
         for (int t = 0; t < shape.frames; ++t)
             for (std::int64_t i = 0; i < row_samples; ++i)
                 scratch[static_cast<size_t>(t * row_samples + i)] =
-                    chunk.data[t * chunk.frame_stride + begin + i] * weights[static_cast<size_t>(chunk_first + begin + i)];
+                    chunk.data[t * chunk.frame_stride + begin + i] *
+                    weights[static_cast<size_t>(chunk_first + begin + i)];
         use(lowrank::BandView{scratch.data(), row_samples, shape.frames, row_samples});
     }
 }
 
 // The basis and N of a solve, with the solve's seconds.
-Solution solved(lowrank::Basis basis, const Settings& settings, std::optional<TrainingGram> training, double seconds)
+Solution solved(lowrank::Basis basis, const Settings& settings, std::optional<TrainingGram> training,
+                double seconds)
 {
     Solution solution{std::move(basis), {}, std::move(training), seconds};
     solution.rank = lowrank::choose_rank(solution.basis, settings.rank);
     return solution;
 }
 
-}  // namespace
+} // namespace
 
 Solution gram_solution(const PassContext& context, ShotStream& stream)
 {
     const Settings& settings = context.settings;
     const ShotShape& shape = stream.shape();
-    const bool training = !settings.training_frames.empty();  // --train-frames: training.h
+    const bool training = !settings.training_frames.empty(); // --train-frames: training.h
     BlockGram gram(training ? 1 : shape.frames, false);
     std::optional<TrainingGram> training_gram;
     if (training)
@@ -100,10 +106,11 @@ Solution randomized_solution(const PassContext& context, ShotStream& stream)
         });
     };
     const int modes =
-        std::min(shape.frames - 1, std::max(settings.randomized_modes, settings.rank.rule == lowrank::RankRule::Fixed
-                                                                           ? settings.rank.fixed_rank + 2
-                                                                           : 0));
-    lowrank::Basis basis = lowrank::randomized_svd(pass, shape.frames, modes, settings.randomized, Progress::silent());
+        std::min(shape.frames - 1,
+                 std::max(settings.randomized_modes,
+                          settings.rank.rule == lowrank::RankRule::Fixed ? settings.rank.fixed_rank + 2 : 0));
+    lowrank::Basis basis =
+        lowrank::randomized_svd(pass, shape.frames, modes, settings.randomized, Progress::silent());
     return solved(std::move(basis), settings, std::nullopt, 0);
 }
 
@@ -152,7 +159,8 @@ void describe_solution(const Settings& settings, const ShotShape& shape, const S
     const auto temporal_modes = [&](int modes) {
         const Eigen::MatrixXd temporal = solution.training ? solution.training->temporal_modes(basis, modes)
                                                            : Eigen::MatrixXd(basis.temporal.leftCols(modes));
-        std::vector<std::vector<double>> weights(static_cast<size_t>(modes), std::vector<double>(shape.frames));
+        std::vector<std::vector<double>> weights(static_cast<size_t>(modes),
+                                                 std::vector<double>(shape.frames));
         for (int j = 0; j < modes; ++j)
             for (int t = 0; t < shape.frames; ++t)
                 weights[static_cast<size_t>(j)][static_cast<size_t>(t)] = temporal(t, j);
@@ -161,8 +169,9 @@ void describe_solution(const Settings& settings, const ShotShape& shape, const S
     report.temporal_modes = temporal_modes(rank);
     if (settings.report_modes <= 0)
         return;
-    const int preview = std::min({std::max(2 * rank, settings.report_modes), shape.frames - 1, basis.modes()});
+    const int preview =
+        std::min({std::max(2 * rank, settings.report_modes), shape.frames - 1, basis.modes()});
     report.preview_temporal_modes = temporal_modes(preview);
 }
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

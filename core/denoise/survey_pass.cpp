@@ -19,8 +19,9 @@ int survey_modes(const Settings& settings, const ShotShape& shape, const lowrank
     return std::max(1, modes);
 }
 
-std::vector<std::vector<double>> survey_rows(const PassContext& context, ShotStream& stream, const RunPlan& plan,
-                                             const Solution& solution, int row_begin, int row_end, bool task)
+std::vector<std::vector<double>> survey_rows(const PassContext& context, ShotStream& stream,
+                                             const RunPlan& plan, const Solution& solution, int row_begin,
+                                             int row_end, bool task)
 {
     const ShotShape& shape = stream.shape();
     const int modes = survey_modes(context.settings, shape, solution.basis);
@@ -35,29 +36,30 @@ std::vector<std::vector<double>> survey_rows(const PassContext& context, ShotStr
     std::vector<float> coefficients, noise_variance, features;
     for (int row = row_begin; row < row_end; row += plan.bands.band_rows) {
         const int end = std::min(row_end, row + plan.bands.band_rows);
-        Band& data = task ? stream.read_task_band(band, row, end) : stream.band_with_halo(band, row, end);
+        Band& data =
+            task ? stream.read_task_band(band, row, end) : stream.band_with_halo(band, row, end, false);
         lowrank::BandView noisy = data.view(shape.frames).view();
         coefficients.resize(static_cast<size_t>(data.rows) * modes);
         lowrank::MutableBandView coefficient_view{coefficients.data(), data.rows, modes, data.rows};
         lowrank::project_coefficients(noisy, temporal, coefficient_view);
         lowrank::ImageBandShape band_shape{shape.width, data.row_end - data.row_begin, shape.channels};
-        coefficient_noise_variance(noisy, coefficient_view.view(), band_shape, context.settings.mode_filter.noise_radius,
-                                   noise_variance);
+        coefficient_noise_variance(noisy, coefficient_view.view(), band_shape,
+                                   context.settings.mode_filter.noise_radius, noise_variance);
         const float* guide = nullptr;
         if (plan.filter.feature_channels > 0) {
             plan.features->read_rows(data.row_begin, data.row_end, features);
             guide = features.data();
         }
-        survey.add_band(coefficient_view.view(), noise_variance, band_shape, data.row_begin, row - data.row_begin,
-                        end - data.row_begin, guide);
+        survey.add_band(coefficient_view.view(), noise_variance, band_shape, data.row_begin,
+                        row - data.row_begin, end - data.row_begin, guide);
         context.progress.advance(end - row);
     }
     context.progress.end();
     return survey.row_sums(row_begin, row_end);
 }
 
-Survey finish_survey(const Settings& settings, const ShotShape& shape, const RunPlan& plan, const Solution& solution,
-                     std::vector<std::vector<double>> rows)
+Survey finish_survey(const Settings& settings, const ShotShape& shape, const RunPlan& plan,
+                     const Solution& solution, std::vector<std::vector<double>> rows)
 {
     Survey result;
     result.modes = survey_modes(settings, shape, solution.basis);
@@ -81,4 +83,4 @@ Survey unfiltered_survey(const Solution& solution)
     return result;
 }
 
-}  // namespace modestack::denoise
+} // namespace modestack::denoise

@@ -127,7 +127,7 @@ double sample_shot_mean(FrameSource& source, int max_frames)
         const int index =
             count == 1 ? 0
                        : static_cast<int>((static_cast<std::int64_t>(k) * (shape.frames - 1)) / (count - 1));
-        source.read_rows(index, 0, shape.height, frame.data());
+        source.read_rows(index, 0, shape.height, frame.data(), nullptr);
         for (float value : frame)
             if (std::isfinite(value)) {
                 sum += value;
@@ -137,16 +137,17 @@ double sample_shot_mean(FrameSource& source, int max_frames)
     return finite > 0 ? sum / static_cast<double>(finite) : 0.0;
 }
 
-void TransformSource::read_rows(int frame_index, int row_begin, int row_end, float* destination)
+void TransformSource::read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                                PassThroughRows* pass_through)
 {
-    m_inner.read_rows(frame_index, row_begin, row_end, destination);
+    m_inner.read_rows(frame_index, row_begin, row_end, destination, pass_through);
     const ShotShape shape = m_inner.shape();
     apply_forward(m_transform, destination,
                   static_cast<std::size_t>(row_end - row_begin) * shape.width * shape.channels);
 }
 
 void InverseTransformSink::write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
-                                      const float* sigma)
+                                      const float* sigma, const PassThroughRows* pass_through)
 {
     const std::size_t count =
         static_cast<std::size_t>(row_end - row_begin) * m_shape.width * m_shape.channels;
@@ -156,7 +157,7 @@ void InverseTransformSink::write_rows(int frame_index, int row_begin, int row_en
     errors.assign(sigma, sigma + count);
     map_sigma_back(m_transform, values.data(), errors.data(), count);
     apply_inverse(m_transform, values.data(), count);
-    m_inner.write_rows(frame_index, row_begin, row_end, values.data(), errors.data());
+    m_inner.write_rows(frame_index, row_begin, row_end, values.data(), errors.data(), pass_through);
 }
 
 } // namespace modestack::denoise

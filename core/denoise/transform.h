@@ -61,7 +61,8 @@ public:
     TransformSource(FrameSource& inner, const Transform& transform) : ForwardingSource(inner), m_transform(transform)
     {
     }
-    void read_rows(int frame_index, int row_begin, int row_end, float* destination) override;
+    void read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                   PassThroughRows* pass_through) override;
 
 private:
     Transform m_transform;
@@ -76,8 +77,8 @@ public:
         : ForwardingSink(inner), m_transform(transform), m_shape(shape)
     {
     }
-    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
-                    const float* sigma) override;
+    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma,
+                    const PassThroughRows* pass_through) override;
 
 private:
     Transform m_transform;

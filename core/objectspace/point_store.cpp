@@ -10,9 +10,10 @@ KeepingSource::KeepingSource(denoise::FrameSource& inner) : ForwardingSource(inn
     m_rows.assign(static_cast<std::size_t>(m_shape.frames), std::vector<float>(row_values() * m_shape.height));
 }
 
-void KeepingSource::read_rows(int frame_index, int row_begin, int row_end, float* destination)
+void KeepingSource::read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                              denoise::PassThroughRows* pass_through)
 {
-    m_inner.read_rows(frame_index, row_begin, row_end, destination);
+    m_inner.read_rows(frame_index, row_begin, row_end, destination, pass_through);
     std::copy(destination, destination + row_values() * (row_end - row_begin),
               m_rows[static_cast<std::size_t>(frame_index)].begin() + row_values() * row_begin);
 }
@@ -24,7 +25,8 @@ PointStore::PointStore(denoise::ShotShape shape) : m_shape(shape)
     m_sigma = m_values;
 }
 
-void PointStore::write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma)
+void PointStore::write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
+                            const float* sigma, const denoise::PassThroughRows* /*pass_through*/)
 {
     const std::size_t row_values = static_cast<std::size_t>(m_shape.width) * m_shape.channels;
     const std::size_t first = static_cast<std::size_t>(row_begin) * row_values;

@@ -17,7 +17,8 @@ namespace modestack::objectspace {
 class KeepingSource : public denoise::ForwardingSource {
 public:
     explicit KeepingSource(denoise::FrameSource& inner);
-    void read_rows(int frame_index, int row_begin, int row_end, float* destination) override;
+    void read_rows(int frame_index, int row_begin, int row_end, float* destination,
+                   denoise::PassThroughRows* pass_through) override;
     /// Frame `frame_index` as read, [row][x][channel].
     const float* frame(int frame_index) const { return m_rows[static_cast<std::size_t>(frame_index)].data(); }
 
@@ -31,7 +32,8 @@ private:
 class PointStore : public denoise::FrameSink {
 public:
     explicit PointStore(denoise::ShotShape shape);
-    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma) override;
+    void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma,
+                    const denoise::PassThroughRows* pass_through) override;
     /// Frame `frame_index`'s values and sigma, [point][channel] (padding points at the end).
     float* values(int frame_index) { return m_values[static_cast<std::size_t>(frame_index)].data(); }
     float* sigma(int frame_index) { return m_sigma[static_cast<std::size_t>(frame_index)].data(); }

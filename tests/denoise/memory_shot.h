@@ -25,7 +25,8 @@ struct MemoryShot : FrameSource {
     };
     Feature albedo, normal, depth;
     ShotShape shape() const override { return size; }
-    void read_rows(int frame, int row_begin, int row_end, float* destination) override
+    void read_rows(int frame, int row_begin, int row_end, float* destination,
+                   PassThroughRows* /*pass_through*/) override
     {
         std::size_t row = static_cast<std::size_t>(size.width) * size.channels;
         std::copy(frames[frame].begin() + row_begin * row, frames[frame].begin() + row_end * row, destination);
@@ -68,7 +69,8 @@ struct MemorySink : FrameSink {
     {
     }
     bool writes_frame(int frame) const override { return written.empty() || written[std::size_t(frame)]; }
-    void write_rows(int frame, int row_begin, int row_end, const float* values, const float* errors) override
+    void write_rows(int frame, int row_begin, int row_end, const float* values, const float* errors,
+                    const PassThroughRows* /*pass_through*/) override
     {
         CHECK(writes_frame(frame));
         CHECK(row_begin == next_row[frame]);

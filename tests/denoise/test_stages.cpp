@@ -77,10 +77,11 @@ PassContext context_of(MemoryShot& shot, MemorySink& sink, const Settings& setti
 struct CountingSource : ForwardingSource {
     explicit CountingSource(FrameSource& inner) : ForwardingSource(inner) {}
     std::vector<int> reads = std::vector<int>(64, 0);
-    void read_rows(int frame, int row_begin, int row_end, float* destination) override
+    void read_rows(int frame, int row_begin, int row_end, float* destination,
+                   PassThroughRows* pass_through) override
     {
         ++reads[std::size_t(frame)];
-        ForwardingSource::read_rows(frame, row_begin, row_end, destination);
+        ForwardingSource::read_rows(frame, row_begin, row_end, destination, pass_through);
     }
 };
 

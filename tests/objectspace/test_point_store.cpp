@@ -41,7 +41,7 @@ TEST_CASE("point store: KeepingSource keeps every row it hands on")
     tbb::parallel_for(0, shot.size.frames, [&](int t) {
         for (int begin = 4; begin >= 0; begin -= 2) {
             std::vector<float> band(2 * row);
-            keeping.read_rows(t, begin, begin + 2, band.data());
+            keeping.read_rows(t, begin, begin + 2, band.data(), nullptr);
             CHECK(std::equal(band.begin(), band.end(), shot.frames[t].begin() + begin * row));
         }
     });
@@ -57,7 +57,7 @@ TEST_CASE("point store: PointStore holds the values and sigma written band by ba
     for (int t = 0; t < values.size.frames; ++t)
         for (int begin = 0; begin < values.size.height; begin += 3)
             store.write_rows(t, begin, begin + 3, values.frames[t].data() + begin * row,
-                             sigma.frames[t].data() + begin * row);
+                             sigma.frames[t].data() + begin * row, nullptr);
     for (int t = 0; t < values.size.frames; ++t) {
         CHECK(std::equal(values.frames[t].begin(), values.frames[t].end(), store.values(t)));
         CHECK(std::equal(sigma.frames[t].begin(), sigma.frames[t].end(), store.sigma(t)));

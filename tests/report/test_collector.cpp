@@ -35,7 +35,8 @@ public:
                     }
     }
     denoise::ShotShape shape() const override { return m_shape; }
-    void read_rows(int frame, int row_begin, int row_end, float* destination) override
+    void read_rows(int frame, int row_begin, int row_end, float* destination,
+                   denoise::PassThroughRows* /*pass_through*/) override
     {
         const size_t row = static_cast<size_t>(m_shape.width) * 3;
         const float* start = m_values.data() + (static_cast<size_t>(frame) * m_shape.height + row_begin) * row;
@@ -53,7 +54,7 @@ private:
 
 class NullSink : public denoise::FrameSink {
 public:
-    void write_rows(int, int, int, const float*, const float*) override {}
+    void write_rows(int, int, int, const float*, const float*, const denoise::PassThroughRows*) override {}
 };
 
 }  // namespace
@@ -91,10 +92,10 @@ TEST_CASE("the collector takes each row once however often and in whatever bands
     Collector once(source, sink, options), twice(source, sink, options);
     std::vector<float> rows(20 * 12 * 3);
     for (int t = 0; t < 6; ++t) {
-        once.source().read_rows(t, 0, 12, rows.data());
-        twice.source().read_rows(t, 0, 5, rows.data());
-        twice.source().read_rows(t, 3, 12, rows.data());  // overlapping halo rows
-        twice.source().read_rows(t, 0, 12, rows.data());  // a second pass
+        once.source().read_rows(t, 0, 12, rows.data(), nullptr);
+        twice.source().read_rows(t, 0, 5, rows.data(), nullptr);
+        twice.source().read_rows(t, 3, 12, rows.data(), nullptr); // overlapping halo rows
+        twice.source().read_rows(t, 0, 12, rows.data(), nullptr); // a second pass
     }
     std::vector<std::vector<double>> mode{{1, 0, 0, 0, 0, 0}};
     CHECK(once.coefficient_images(0, mode)[0].rgb == twice.coefficient_images(0, mode)[0].rgb);
@@ -151,8 +152,8 @@ TEST_CASE("the estimated error is the mean of sigma squared over value squared p
     NullSink sink;
     Collector collector(source, sink, {});
     std::vector<float> rebuilt(4 * 3 * 3, 0.3f), sigma(4 * 3 * 3, 0.05f);
-    collector.sink().write_rows(1, 0, 3, rebuilt.data(), sigma.data());
-    collector.sink().write_rows(1, 0, 3, rebuilt.data(), sigma.data());  // taken once
+    collector.sink().write_rows(1, 0, 3, rebuilt.data(), sigma.data(), nullptr);
+    collector.sink().write_rows(1, 0, 3, rebuilt.data(), sigma.data(), nullptr); // taken once
     std::vector<double> errors = collector.estimated_error();
     CHECK(std::isnan(errors[0]));
     CHECK(errors[1] == doctest::Approx(0.05 * 0.05 / (0.3 * 0.3 + 0.01)));
