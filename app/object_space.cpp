@@ -69,7 +69,8 @@ private:
 // Positions and normals of the points in the shot's first frame (their rest
 // pose: neighbours on a surface stay neighbours as it moves), or an empty
 // result when the points files lack either layer.
-denoise::SurfaceSamples read_surface_samples(const io::FrameSequence& files, std::int64_t count, double spacing)
+denoise::SurfaceSamples read_surface_samples(const io::FrameSequence& files, std::int64_t count, double spacing,
+                                             io::ExrCodec codec)
 {
     denoise::SurfaceSamples samples;
     samples.spacing = spacing;
@@ -78,7 +79,7 @@ denoise::SurfaceSamples read_surface_samples(const io::FrameSequence& files, std
     first.frames.resize(1);
     auto read_layer = [&](const char* layer, std::vector<float>& out) {
         try {
-            io::SequenceReader reader(first, {layer});
+            io::SequenceReader reader(first, {layer}, codec);
             if (reader.selected_channel_count() != 3)
                 return false;
             std::vector<float> all(static_cast<std::size_t>(reader.width()) * reader.height() * 3);
@@ -94,11 +95,11 @@ denoise::SurfaceSamples read_surface_samples(const io::FrameSequence& files, std
     return samples;
 }
 
-std::unique_ptr<io::SequenceReader> open_lookup(const io::FrameSequence& frames)
+std::unique_ptr<io::SequenceReader> open_lookup(const io::FrameSequence& frames, io::ExrCodec codec)
 {
     std::unique_ptr<io::SequenceReader> lookup;
     try {
-        lookup = std::make_unique<io::SequenceReader>(frames, std::vector<std::string>{"PointLookup"});
+        lookup = std::make_unique<io::SequenceReader>(frames, std::vector<std::string>{"PointLookup"}, codec);
     } catch (const Error&) {
         throw bad_input(frames.files.front(), "has no PointLookup layer: render the shot with render --points "
                                               "for --object-space");
@@ -161,10 +162,10 @@ void rebuild_from_points(const float* lookup, std::size_t pixels, const float* p
 
 ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings settings, Progress& progress)
 {
-    io::SequenceReader frame_reader(job.frames, job.layers);
-    std::unique_ptr<io::SequenceReader> lookup_reader = open_lookup(job.frames);
+    io::SequenceReader frame_reader(job.frames, job.layers, job.exr_codec);
+    std::unique_ptr<io::SequenceReader> lookup_reader = open_lookup(job.frames, job.exr_codec);
     io::FrameSequence point_files = io::find_input_sequence(job.points, io::describe_frames(job.frames.frames));
-    io::SequenceReader point_reader(point_files, job.layers);
+    io::SequenceReader point_reader(point_files, job.layers, job.exr_codec);
     if (point_reader.selected_channel_count() != frame_reader.selected_channel_count() ||
         point_reader.selected_channel_count() > 4)
         throw bad_input(point_files.files.front(),
@@ -188,7 +189,7 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
     result.report = denoise::run_denoise(noisy, store, settings, progress);
     // Sigma (and the filter) over the surfaces: the engine's sigma pooled over a
     // point image's rows, which are not surface neighbours.
-    denoise::SurfaceSamples samples = read_surface_samples(point_files, result.points, header.spacing);
+    denoise::SurfaceSamples samples = read_surface_samples(point_files, result.points, header.spacing, job.exr_codec);
     if (samples.count() == 0 || !(samples.spacing > 0)) {
         progress.warn(fmt::format("{} has no Position and Normal layers or no modestack:point_spacing: sigma is "
                                   "the point image's and the points are not filtered over the surfaces",

@@ -14,6 +14,7 @@
 #include "core/denoise/engine.h"
 #include "core/denoise/frame_stream.h"
 #include "core/denoise/surface_filter.h"
+#include "io/exr_codec.h"
 #include "io/frame_output.h"
 #include "io/sequence.h"
 
@@ -56,6 +57,7 @@ struct ObjectSpaceJob {
     bool surface_filter = true;                   ///< filter over the surfaces (denoise/surface_filter.h)
     std::vector<double> filter_widths;            ///< its candidate widths, in lattice spacings
     int sigma_radius = 2;                         ///< sigma's pooling window, in lattice spacings (≥ 1 used)
+    io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;  ///< --exr-codec, for frames and points alike
 };
 
 /// What the job did, for the summary.

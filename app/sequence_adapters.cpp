@@ -89,7 +89,7 @@ const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxilia
     input.looked = true;
     for (const std::vector<std::string>& selectors : auxiliary_candidates(kind, m_reader.layers())) {
         try {
-            auto reader = std::make_unique<io::SequenceReader>(m_reader.sequence(), selectors);
+            auto reader = std::make_unique<io::SequenceReader>(m_reader.sequence(), selectors, m_reader.exr_codec());
             if (reader->width() != m_reader.width() || reader->height() != m_reader.height())
                 continue;
             // A variance per selected channel, in the same component order.
@@ -153,7 +153,7 @@ void SequenceSink::begin(const denoise::RebuildStart& start)
         m_outputs.push_back(m_paths[frame].empty() ? nullptr
                                                    : std::make_unique<io::FrameOutput>(
                                                          m_paths[frame], m_reader, static_cast<int>(frame),
-                                                         m_sigma_names, attributes));
+                                                         m_sigma_names, attributes, m_reader.exr_codec()));
 }
 
 void SequenceSink::commit()

@@ -77,7 +77,8 @@ private:
 class SequenceSink : public denoise::FrameSink {
 public:
     /// `outputs` has one path per frame ("" = skip that frame, e.g. --skip-existing).
-    /// `modes_directory` ("" = none) receives mode.NN.exr per spatial mode.
+    /// `modes_directory` ("" = none) receives mode.NN.exr per spatial mode. The
+    /// copies are encoded with `reader`'s ExrCodec (--exr-codec).
     SequenceSink(const io::SequenceReader& reader, std::vector<std::string> outputs, std::string modes_directory);
 
     /// Takes pass-through channels from the rows `source` decoded for the same
