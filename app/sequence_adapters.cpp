@@ -4,7 +4,6 @@
 #include "core/common/error.h"
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 
 #include <filesystem>
 
@@ -96,7 +95,6 @@ const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxilia
             if (kind == denoise::Auxiliary::Variance &&
                 reader->selected_channel_count() != m_reader.selected_channel_count())
                 continue;
-            input.layer = fmt::format("{}", fmt::join(selectors, ","));
             input.channels = reader->selected_channel_count();
             input.reader = std::move(reader);
             return input;
@@ -108,8 +106,6 @@ const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxilia
 }
 
 int SequenceSource::auxiliary_channels(denoise::Auxiliary kind) const { return auxiliary(kind).channels; }
-
-std::string SequenceSource::auxiliary_layer(denoise::Auxiliary kind) const { return auxiliary(kind).layer; }
 
 const io::SequenceReader* SequenceSource::auxiliary_reader(denoise::Auxiliary kind) const
 {
@@ -123,13 +119,6 @@ void SequenceSource::read_auxiliary_rows(denoise::Auxiliary kind, int frame_inde
     if (!input.reader)
         throw internal_error("an auxiliary layer was read that the input does not have");
     input.reader->read_selected(frame_index, row_begin, row_end, destination);
-}
-
-void SequenceSource::release_auxiliary(denoise::Auxiliary kind)
-{
-    std::lock_guard<std::mutex> lock(m_auxiliary_mutex);
-    m_auxiliary[static_cast<size_t>(kind)].reader.reset();
-    m_auxiliary[static_cast<size_t>(kind)].channels = 0;
 }
 
 SequenceSink::SequenceSink(const io::SequenceReader& reader, std::vector<std::string> outputs,

@@ -37,14 +37,9 @@ public:
     int auxiliary_channels(denoise::Auxiliary kind) const override;
     void read_auxiliary_rows(denoise::Auxiliary kind, int frame_index, int row_begin, int row_end,
                              float* destination) override;
-    /// The layer found for `kind` ("" = none).
-    std::string auxiliary_layer(denoise::Auxiliary kind) const;
     /// The sequence opened for `kind`'s layer (opening it now), or nullptr when
-    /// the input has none (valid until release_auxiliary): for the memory
-    /// budget, which counts its open files.
+    /// the input has none: for the memory budget, which counts its open files.
     const io::SequenceReader* auxiliary_reader(denoise::Auxiliary kind) const;
-    /// Closes the files opened for `kind` (after a pre-pass that was their only use).
-    void release_auxiliary(denoise::Auxiliary kind);
 
     /// Starts keeping the native rows of each read of a frame with pass-through channels.
     void keep_native_rows() { m_keeping = true; }
@@ -60,7 +55,6 @@ private:
     };
     struct AuxiliaryInput {
         bool looked = false;
-        std::string layer;
         int channels = 0;
         std::unique_ptr<io::SequenceReader> reader;
     };

@@ -114,7 +114,7 @@ SequenceReader::SequenceReader(const FrameSequence& sequence, const std::vector<
                 throw Error(ErrorKind::BadInput,
                             fmt::format("channel '{}' not found (available: {})", name,
                                         fmt::join(spec.channelnames, ", ")),
-                            frame->file, frame->frame_number, name);
+                            frame->file, frame->frame_number);
             frame->selected.push_back(index);
         }
     }
