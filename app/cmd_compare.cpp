@@ -8,6 +8,7 @@
 // catches its own errors; bad usage is 5 and an internal error 6 so that no
 // failure can be mistaken for a verdict.
 #include "app/command.h"
+#include "app/exr_codec_option.h"
 #include "app/run_context.h"
 #include "core/common/error.h"
 #include "core/metrics/sequence_comparison.h"
@@ -45,6 +46,7 @@ struct CompareOptions {
     metrics::VerdictRule rule;
     std::string json_path;
     CommonOptions common;
+    io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;
 };
 
 // The two sequences do not describe the same pixels (idiff's ErrDifferentSize).
@@ -152,8 +154,8 @@ int compare(const CompareOptions& options)
         inputs.insert(inputs.end(), reference.files.begin(), reference.files.end());
         io::check_outputs({options.json_path}, inputs);
     }
-    io::SequenceReader test_reader(test, options.layers);
-    io::SequenceReader reference_reader(reference, options.layers);
+    io::SequenceReader test_reader(test, options.layers, options.exr_codec);
+    io::SequenceReader reference_reader(reference, options.layers, options.exr_codec);
     std::vector<std::string> test_channels = test_reader.selected_channel_names();
     std::vector<std::string> reference_channels = reference_reader.selected_channel_names();
     if (components(test_channels) != components(reference_channels))
@@ -329,6 +331,7 @@ Subcommand add_compare_command(CLI::App& parent)
         ->check(kNonNegative);
     command->add_flag("-q,--quiet", options->common.quiet,
                       "Print only the verdict line (no table, no progress)");
+    add_exr_codec_option(*command, options->exr_codec);
     command->footer(
         "The shot's verdict is its worst frame's. Exit codes (idiff's, unlike the other subcommands): "
         "0 PASS, 1 WARNING, 2 FAILURE, 3 the sequences differ in size or channels, 4 missing or "

@@ -7,6 +7,7 @@
 #include "app/color_adapters.h"
 #include "app/command.h"
 #include "app/denoise_stages.h"
+#include "app/exr_codec_option.h"
 #include "app/memory_budget.h"
 #include "app/method_options.h"
 #include "app/mpi_job.h"
@@ -62,6 +63,7 @@ struct DenoiseOptions {
     MethodOptions method_options;
     StageOptions stage;
     CommonOptions common;
+    io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;
     const CLI::App* command = nullptr;  ///< for the fingerprint of --stage
 };
 
@@ -341,6 +343,7 @@ int run_object_space_denoise(const DenoiseOptions& options, const denoise::Setti
     job.filter_widths = options.mode_filter_widths;
     job.sigma_radius = options.sigma_radius;
     job.attributes = provenance_attributes(input);
+    job.exr_codec = options.exr_codec;
     ObjectSpaceResult result = run_object_space(job, settings, context.progress());
     const denoise::Report& report = result.report;
     double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -424,7 +427,7 @@ int run_denoise(const DenoiseOptions& options)
         }
         return run_object_space_denoise(options, settings, input, paths, frames_written, start, context);
     }
-    io::SequenceReader reader(input, options.layers);
+    io::SequenceReader reader(input, options.layers, options.exr_codec);
     DenoiseColor color = choose_denoise_color(options.ocio_config, options.colorspace, reader);
 
     if (staged)
@@ -616,6 +619,7 @@ Subcommand add_denoise_command(CLI::App& parent)
     add_method_options(*command, options->method_options);
     add_stage_options(*command, options->stage);
     add_common_options(*command, options->common);
+    add_exr_codec_option(*command, options->exr_codec);
     options->command = command;
     return {command, [options] {
                 if (!started_by_mpirun())

@@ -7,6 +7,7 @@
 // Combined included, is copied untouched: the final beauty is composited by
 // `modestack run` (beauty = DiffCol × (DiffDir + DiffInd) + Emit, [0017]).
 #include "app/command.h"
+#include "app/exr_codec_option.h"
 #include "app/option_values.h"
 #include "app/run_context.h"
 #include "core/common/error.h"
@@ -47,6 +48,7 @@ struct RefineOptions {
     double budget_percent = -1; ///< < 0: use the threshold
     refine::RefineSettings settings;
     CommonOptions common;
+    io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;
 };
 
 const scene::SceneInfo& find_scene(const std::string& name)
@@ -148,7 +150,7 @@ int run_refine(RefineOptions& options)
     io::FrameSequence masks;
     if (!options.masks.empty())
         masks = io::output_sequence(options.masks, input.frames);
-    io::SequenceReader reader(input, {options.layer, options.layer + ".sigma"});
+    io::SequenceReader reader(input, {options.layer, options.layer + ".sigma"}, options.exr_codec);
     if (reader.width() != render_options.width || reader.height() != render_options.height)
         throw bad_input(
             input.files.front(),
@@ -208,7 +210,7 @@ int run_refine(RefineOptions& options)
             }
         reader.read_native(i, 0, height, native);
         outputs.push_back(std::make_unique<io::FrameOutput>(
-            output.files[i], reader, i, std::vector<std::string>{weight_channel}, attributes));
+            output.files[i], reader, i, std::vector<std::string>{weight_channel}, attributes, options.exr_codec));
         outputs.back()->write_replaced_rows(0, height, native, rows.data(), weights.data());
         if (!masks.files.empty()) {
             io::NewImageDescription image;
@@ -329,6 +331,7 @@ Subcommand add_refine_command(CLI::App& parent)
     command->add_option("--json", options->json_path,
                         "Write per-frame and total pixels re-rendered, times and estimated relMSE as JSON");
     add_common_options(*command, options->common);
+    add_exr_codec_option(*command, options->exr_codec);
     return {command, [options] { return run_refine(*options); }};
 }
 

@@ -50,7 +50,8 @@ PointHeader read_point_header(const io::SequenceReader& points)
 // Positions and normals of the points in the shot's first frame (their rest
 // pose: neighbours on a surface stay neighbours as it moves), or an empty
 // result when the points files lack either layer.
-objectspace::SurfaceSamples read_surface_samples(const io::FrameSequence& files, std::int64_t count, double spacing)
+objectspace::SurfaceSamples read_surface_samples(const io::FrameSequence& files, std::int64_t count,
+                                                 double spacing, io::ExrCodec codec)
 {
     objectspace::SurfaceSamples samples;
     samples.spacing = spacing;
@@ -59,7 +60,7 @@ objectspace::SurfaceSamples read_surface_samples(const io::FrameSequence& files,
     first.frames.resize(1);
     auto read_layer = [&](const char* layer, std::vector<float>& out) {
         try {
-            io::SequenceReader reader(first, {layer});
+            io::SequenceReader reader(first, {layer}, codec);
             if (reader.selected_channel_count() != 3)
                 return false;
             std::vector<float> all(static_cast<std::size_t>(reader.width()) * reader.height() * 3);
@@ -75,11 +76,11 @@ objectspace::SurfaceSamples read_surface_samples(const io::FrameSequence& files,
     return samples;
 }
 
-std::unique_ptr<io::SequenceReader> open_lookup(const io::FrameSequence& frames)
+std::unique_ptr<io::SequenceReader> open_lookup(const io::FrameSequence& frames, io::ExrCodec codec)
 {
     std::unique_ptr<io::SequenceReader> lookup;
     try {
-        lookup = std::make_unique<io::SequenceReader>(frames, std::vector<std::string>{"PointLookup"});
+        lookup = std::make_unique<io::SequenceReader>(frames, std::vector<std::string>{"PointLookup"}, codec);
     } catch (const Error&) {
         throw bad_input(frames.files.front(), "has no PointLookup layer: render the shot with render --points "
                                               "for --object-space");
@@ -94,10 +95,10 @@ std::unique_ptr<io::SequenceReader> open_lookup(const io::FrameSequence& frames)
 
 ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings settings, Progress& progress)
 {
-    io::SequenceReader frame_reader(job.frames, job.layers);
-    std::unique_ptr<io::SequenceReader> lookup_reader = open_lookup(job.frames);
+    io::SequenceReader frame_reader(job.frames, job.layers, job.exr_codec);
+    std::unique_ptr<io::SequenceReader> lookup_reader = open_lookup(job.frames, job.exr_codec);
     io::FrameSequence point_files = io::find_input_sequence(job.points, io::describe_frames(job.frames.frames));
-    io::SequenceReader point_reader(point_files, job.layers);
+    io::SequenceReader point_reader(point_files, job.layers, job.exr_codec);
     if (point_reader.selected_channel_count() != frame_reader.selected_channel_count() ||
         point_reader.selected_channel_count() > 4)
         throw bad_input(point_files.files.front(),
@@ -115,7 +116,8 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
     filter.widths = job.filter_widths;
     filter.filter = job.surface_filter;
     filter.window_spacings = std::max(1, job.sigma_radius);
-    const objectspace::SurfaceSamples samples = read_surface_samples(point_files, result.points, header.spacing);
+    const objectspace::SurfaceSamples samples =
+        read_surface_samples(point_files, result.points, header.spacing, job.exr_codec);
     objectspace::PointDenoise denoised =
         objectspace::denoise_points(point_source, settings, samples, filter, progress);
     result.report = std::move(denoised.report);

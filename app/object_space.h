@@ -12,6 +12,7 @@
 #include "core/common/progress.h"
 #include "core/denoise/engine.h"
 #include "core/objectspace/surface_filter.h"
+#include "io/exr_codec.h"
 #include "io/frame_output.h"
 #include "io/sequence.h"
 
@@ -31,6 +32,7 @@ struct ObjectSpaceJob {
     bool surface_filter = true;                   ///< filter over the surfaces (objectspace/surface_filter.h)
     std::vector<double> filter_widths;            ///< its candidate widths, in lattice spacings
     int sigma_radius = 2;                         ///< sigma's pooling window, in lattice spacings (≥ 1 used)
+    io::ExrCodec exr_codec = io::ExrCodec::Libdeflate; ///< --exr-codec, for frames and points alike
 };
 
 /// What the job did, for the summary.

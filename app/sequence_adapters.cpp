@@ -4,7 +4,6 @@
 #include "core/common/error.h"
 
 #include <fmt/format.h>
-#include <fmt/ranges.h>
 
 #include <filesystem>
 
@@ -76,14 +75,13 @@ const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxilia
     input.looked = true;
     for (const std::vector<std::string>& selectors : auxiliary_candidates(kind, m_reader.layers())) {
         try {
-            auto reader = std::make_unique<io::SequenceReader>(m_reader.sequence(), selectors);
+            auto reader = std::make_unique<io::SequenceReader>(m_reader.sequence(), selectors, m_reader.exr_codec());
             if (reader->width() != m_reader.width() || reader->height() != m_reader.height())
                 continue;
             // A variance per selected channel, in the same component order.
             if (kind == denoise::Auxiliary::Variance &&
                 reader->selected_channel_count() != m_reader.selected_channel_count())
                 continue;
-            input.layer = fmt::format("{}", fmt::join(selectors, ","));
             input.channels = reader->selected_channel_count();
             input.reader = std::move(reader);
             return input;
@@ -95,8 +93,6 @@ const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxilia
 }
 
 int SequenceSource::auxiliary_channels(denoise::Auxiliary kind) const { return auxiliary(kind).channels; }
-
-std::string SequenceSource::auxiliary_layer(denoise::Auxiliary kind) const { return auxiliary(kind).layer; }
 
 const io::SequenceReader* SequenceSource::auxiliary_reader(denoise::Auxiliary kind) const
 {
@@ -110,13 +106,6 @@ void SequenceSource::read_auxiliary_rows(denoise::Auxiliary kind, int frame_inde
     if (!input.reader)
         throw internal_error("an auxiliary layer was read that the input does not have");
     input.reader->read_selected(frame_index, row_begin, row_end, destination);
-}
-
-void SequenceSource::release_auxiliary(denoise::Auxiliary kind)
-{
-    std::lock_guard<std::mutex> lock(m_auxiliary_mutex);
-    m_auxiliary[static_cast<size_t>(kind)].reader.reset();
-    m_auxiliary[static_cast<size_t>(kind)].channels = 0;
 }
 
 SequenceSink::SequenceSink(const io::SequenceReader& reader, std::vector<std::string> outputs,
@@ -138,7 +127,7 @@ void SequenceSink::begin(const denoise::RebuildStart& start)
         m_outputs.push_back(m_paths[frame].empty() ? nullptr
                                                    : std::make_unique<io::FrameOutput>(
                                                          m_paths[frame], m_reader, static_cast<int>(frame),
-                                                         m_sigma_names, attributes));
+                                                         m_sigma_names, attributes, m_reader.exr_codec()));
 }
 
 void SequenceSink::commit()

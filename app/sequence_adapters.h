@@ -38,19 +38,13 @@ public:
     int auxiliary_channels(denoise::Auxiliary kind) const override;
     void read_auxiliary_rows(denoise::Auxiliary kind, int frame_index, int row_begin, int row_end,
                              float* destination) override;
-    /// The layer found for `kind` ("" = none).
-    std::string auxiliary_layer(denoise::Auxiliary kind) const;
     /// The sequence opened for `kind`'s layer (opening it now), or nullptr when
-    /// the input has none (valid until release_auxiliary): for the memory
-    /// budget, which counts its open files.
+    /// the input has none: for the memory budget, which counts its open files.
     const io::SequenceReader* auxiliary_reader(denoise::Auxiliary kind) const;
-    /// Closes the files opened for `kind` (after a pre-pass that was their only use).
-    void release_auxiliary(denoise::Auxiliary kind);
 
 private:
     struct AuxiliaryInput {
         bool looked = false;
-        std::string layer;
         int channels = 0;
         std::unique_ptr<io::SequenceReader> reader;
     };
@@ -65,7 +59,8 @@ private:
 class SequenceSink : public denoise::FrameSink {
 public:
     /// `outputs` has one path per frame ("" = skip that frame, e.g. --skip-existing).
-    /// `modes_directory` ("" = none) receives mode.NN.exr per spatial mode.
+    /// `modes_directory` ("" = none) receives mode.NN.exr per spatial mode. The
+    /// copies are encoded with `reader`'s ExrCodec (--exr-codec).
     SequenceSink(const io::SequenceReader& reader, std::vector<std::string> outputs, std::string modes_directory);
 
     /// Attributes every output header gets (provenance), besides rank, rule and solver.

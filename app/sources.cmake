@@ -19,6 +19,7 @@ target_sources(modestack PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/denoise_stages.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mpi_job.cpp
   ${CMAKE_CURRENT_LIST_DIR}/option_values.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/exr_codec_option.cpp
   ${CMAKE_CURRENT_LIST_DIR}/object_space.cpp
   ${CMAKE_CURRENT_LIST_DIR}/report/report_collector.cpp
   ${CMAKE_CURRENT_LIST_DIR}/report/image_encoding.cpp

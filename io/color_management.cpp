@@ -228,19 +228,19 @@ std::string ColorConfig::default_view(const std::string& display) const
 }
 
 ColorConverter::ColorConverter(const ColorConfig& config, const std::string& space)
-    : m_space(config.find_color_space(space, "colour space"))
 {
+    const std::string found = config.find_color_space(space, "colour space");
     const OCIO::ConstConfigRcPtr& ocio = config.impl().config;
     auto impl = std::make_shared<Impl>();
     try {
-        OCIO::ConstProcessorRcPtr forward = ocio->getProcessor(m_space.c_str(), OCIO::ROLE_SCENE_LINEAR);
-        OCIO::ConstProcessorRcPtr inverse = ocio->getProcessor(OCIO::ROLE_SCENE_LINEAR, m_space.c_str());
+        OCIO::ConstProcessorRcPtr forward = ocio->getProcessor(found.c_str(), OCIO::ROLE_SCENE_LINEAR);
+        OCIO::ConstProcessorRcPtr inverse = ocio->getProcessor(OCIO::ROLE_SCENE_LINEAR, found.c_str());
         impl->to_linear = exact_cpu_processor(forward);
         impl->from_linear = exact_cpu_processor(inverse);
         impl->identity = forward->isNoOp() && inverse->isNoOp();
     } catch (const OCIO::Exception& exception) {
         throw bad_input(config.path(), fmt::format("cannot convert '{}' to and from scene_linear: {}",
-                                                   m_space, exception.what()));
+                                                   found, exception.what()));
     }
     m_impl = std::move(impl);
 }

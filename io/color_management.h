@@ -93,7 +93,6 @@ public:
     /// `space` must be known to `config` (see ColorConfig::find_color_space).
     ColorConverter(const ColorConfig& config, const std::string& space);
 
-    const std::string& space() const { return m_space; }
     /// Whether both directions leave every value unchanged.
     bool is_identity() const;
     /// Converts `pixel_count` interleaved pixels of `channels` floats (3 = RGB,
@@ -105,7 +104,6 @@ public:
     struct Impl;
 
 private:
-    std::string m_space;
     std::shared_ptr<const Impl> m_impl;
 };
 

@@ -103,7 +103,7 @@ struct FrameOutput::State {
 
 FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, int frame_index,
                          const std::vector<std::string>& extra_channels,
-                         const std::vector<HeaderAttribute>& attributes)
+                         const std::vector<HeaderAttribute>& attributes, ExrCodec codec)
     : m_path(path), m_temporary_path(claim_temporary_path(path)), m_state(std::make_unique<State>())
 {
     const detail::OpenFrame& source = reader.frame(frame_index);
@@ -135,8 +135,9 @@ FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, 
         for (const ValuePlace& place : *places)
             m_state->all_places_half = m_state->all_places_half && place.type == OIIO::TypeDesc::HALF;
     m_state->spec = spec;
-    m_state->zip_writer =
-        detail::ZipScanlineWriter::open(m_temporary_path, m_path, source, extra_channels, attributes);
+    if (codec == ExrCodec::Libdeflate)
+        m_state->zip_writer =
+            detail::ZipScanlineWriter::open(m_temporary_path, m_path, source, extra_channels, attributes);
     if (!m_state->zip_writer)
         open(&spec);
 }

@@ -5,6 +5,8 @@
 // windows, attributes); a render output is described from scratch.
 #pragma once
 
+#include "io/exr_codec.h"
+
 #include <memory>
 #include <string>
 #include <vector>
@@ -45,10 +47,12 @@ public:
     /// An output that copies frame `frame_index` of `reader` (every channel,
     /// pixel type, window and attribute), with `extra_channels` appended in the
     /// pixel type of the first selected channel, plus `attributes`. Tiled
-    /// inputs are written as scanline files. `reader` must outlive this object.
+    /// inputs are written as scanline files; `codec` encodes the copy of a
+    /// ZIP/ZIPS scanline input. `reader` must outlive this object.
     FrameOutput(const std::string& path, const SequenceReader& reader, int frame_index,
-                const std::vector<std::string>& extra_channels, const std::vector<HeaderAttribute>& attributes);
-    /// An output for a new image.
+                const std::vector<std::string>& extra_channels, const std::vector<HeaderAttribute>& attributes,
+                ExrCodec codec = ExrCodec::Libdeflate);
+    /// An output for a new image (always written with OpenImageIO).
     FrameOutput(const std::string& path, const NewImageDescription& image,
                 const std::vector<HeaderAttribute>& attributes);
     /// Removes the temporary file unless commit() succeeded.

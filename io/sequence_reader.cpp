@@ -17,7 +17,7 @@
 namespace modestack::io {
 namespace {
 
-std::unique_ptr<detail::OpenFrame> open_frame(const std::string& file, int frame_number)
+std::unique_ptr<detail::OpenFrame> open_frame(const std::string& file, int frame_number, ExrCodec codec)
 {
     auto frame = std::make_unique<detail::OpenFrame>();
     frame->file = file;
@@ -38,7 +38,8 @@ std::unique_ptr<detail::OpenFrame> open_frame(const std::string& file, int frame
         offset += frame->spec.channelformat(c).size();
     }
     frame->native_pixel_bytes = offset;
-    frame->zip_layout = detail::zip_layout(*frame);
+    if (codec == ExrCodec::Libdeflate)
+        frame->zip_layout = detail::zip_layout(*frame);
     return frame;
 }
 
@@ -81,13 +82,14 @@ void read_rows(const detail::OpenFrame& frame, int row_begin, int row_end, int c
 
 }  // namespace
 
-SequenceReader::SequenceReader(const FrameSequence& sequence, const std::vector<std::string>& layer_selectors)
-    : m_sequence(sequence)
+SequenceReader::SequenceReader(const FrameSequence& sequence, const std::vector<std::string>& layer_selectors,
+                               ExrCodec codec)
+    : m_sequence(sequence), m_exr_codec(codec)
 {
     if (sequence.files.empty())
         throw bad_input(sequence.pattern, "no frames");
     for (size_t i = 0; i < sequence.files.size(); ++i)
-        m_frames.push_back(open_frame(sequence.files[i], sequence.frames[i]));
+        m_frames.push_back(open_frame(sequence.files[i], sequence.frames[i], codec));
 
     const detail::OpenFrame& first = *m_frames.front();
     m_width = first.spec.width;
@@ -112,7 +114,7 @@ SequenceReader::SequenceReader(const FrameSequence& sequence, const std::vector<
                 throw Error(ErrorKind::BadInput,
                             fmt::format("channel '{}' not found (available: {})", name,
                                         fmt::join(spec.channelnames, ", ")),
-                            frame->file, frame->frame_number, name);
+                            frame->file, frame->frame_number);
             frame->selected.push_back(index);
         }
     }

@@ -6,6 +6,7 @@
 // tiled files; never loads a whole frame unless asked for all its rows.
 #pragma once
 
+#include "io/exr_codec.h"
 #include "io/layers.h"
 #include "io/sequence.h"
 
@@ -23,14 +24,18 @@ struct OpenFrame;
 class SequenceReader {
 public:
     /// Opens every file of `sequence` and selects the channels named by
-    /// `layer_selectors` (see select_layers). Throws Error naming the file on
-    /// any unreadable, mismatched or unsupported frame.
-    SequenceReader(const FrameSequence& sequence, const std::vector<std::string>& layer_selectors);
+    /// `layer_selectors` (see select_layers); `codec` decodes ZIP/ZIPS scanline
+    /// frames. Throws Error naming the file on any unreadable, mismatched or
+    /// unsupported frame.
+    SequenceReader(const FrameSequence& sequence, const std::vector<std::string>& layer_selectors,
+                   ExrCodec codec = ExrCodec::Libdeflate);
     ~SequenceReader();
     SequenceReader(const SequenceReader&) = delete;
     SequenceReader& operator=(const SequenceReader&) = delete;
 
     const FrameSequence& sequence() const { return m_sequence; }
+    /// What decodes the frames' ZIP/ZIPS scanlines.
+    ExrCodec exr_codec() const { return m_exr_codec; }
     int frame_count() const { return static_cast<int>(m_frames.size()); }
     int width() const { return m_width; }
     int height() const { return m_height; }
@@ -72,6 +77,7 @@ public:
 
 private:
     FrameSequence m_sequence;
+    ExrCodec m_exr_codec;
     std::vector<std::unique_ptr<detail::OpenFrame>> m_frames;
     std::vector<SelectedLayer> m_layers;
     int m_selected_channel_count = 0;

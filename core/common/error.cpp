@@ -22,14 +22,8 @@ std::string compose(const std::string& reason, const std::string& file)
 
 }  // namespace
 
-Error::Error(ErrorKind kind, const std::string& reason, const std::string& file, int frame,
-             const std::string& channel)
-    : std::runtime_error(compose(reason, file)),
-      m_kind(kind),
-      m_reason(one_line(reason)),
-      m_file(file),
-      m_frame(frame),
-      m_channel(channel)
+Error::Error(ErrorKind kind, const std::string& reason, const std::string& file, int frame)
+    : std::runtime_error(compose(reason, file)), m_kind(kind), m_file(file), m_frame(frame)
 {
 }
 

@@ -23,23 +23,18 @@ inline constexpr int kNoFrame = -2147483647 - 1;
 /// An error a user can act on: a one-line reason, plus where it happened.
 class Error : public std::runtime_error {
 public:
-    /// `reason` says what is wrong and, where it helps, what to do; `file`,
-    /// `frame` and `channel` are optional context that what() prefixes.
-    Error(ErrorKind kind, const std::string& reason, const std::string& file = {},
-          int frame = kNoFrame, const std::string& channel = {});
+    /// `reason` says what is wrong and, where it helps, what to do; `file`
+    /// (which what() prefixes) and `frame` are optional context.
+    Error(ErrorKind kind, const std::string& reason, const std::string& file = {}, int frame = kNoFrame);
 
     ErrorKind kind() const { return m_kind; }
-    const std::string& reason() const { return m_reason; }
     const std::string& file() const { return m_file; }
     int frame() const { return m_frame; }
-    const std::string& channel() const { return m_channel; }
 
 private:
     ErrorKind m_kind;
-    std::string m_reason;
     std::string m_file;
     int m_frame;
-    std::string m_channel;
 };
 
 /// Error about an input or output file (exit code 1).

@@ -83,7 +83,6 @@ void Progress::draw(std::int64_t done, bool final_line)
     std::fflush(m_stream);
 }
 
-void request_cancel() { g_cancel.store(true); }
 bool cancel_requested() { return g_cancel.load(std::memory_order_relaxed); }
 void throw_if_cancelled()
 {

@@ -46,15 +46,14 @@ private:
     std::chrono::steady_clock::time_point m_start;
 };
 
-/// Asks every long loop to stop at its next check (async-signal-safe).
-void request_cancel();
-/// True once request_cancel() was called.
+/// True once request_cancel_by_signal() was called.
 bool cancel_requested();
 /// Throws cancelled_error() when a cancel was requested; call between work units.
 void throw_if_cancelled();
 /// Signal number that caused the cancel request, or 0.
 int cancel_signal();
-/// Records the signal that asked to cancel (async-signal-safe).
+/// Asks every long loop to stop at its next check and records the signal that
+/// asked (async-signal-safe).
 void request_cancel_by_signal(int signal_number);
 
 }  // namespace modestack

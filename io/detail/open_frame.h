@@ -20,8 +20,8 @@ struct OpenFrame {
     std::vector<int> selected;      ///< channel index of each selected channel in this file
     std::vector<size_t> byte_offset;  ///< byte offset of each channel in a native pixel
     size_t native_pixel_bytes = 0;
-    /// Set for a single-part ZIP/ZIPS scanline file: its rows are decoded with
-    /// libdeflate (zip_scanline_reader.h), not through `input`.
+    /// Set for a single-part ZIP/ZIPS scanline file read with ExrCodec::Libdeflate:
+    /// its rows are decoded with libdeflate (zip_scanline_reader.h), not through `input`.
     std::shared_ptr<const ZipLayout> zip_layout;
 };
 

@@ -9,7 +9,6 @@
 #include <openexr.h>
 
 #include <algorithm>
-#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <new>
@@ -50,8 +49,6 @@ void undo_difference_and_split(unsigned char* predicted, std::size_t count, unsi
 
 std::shared_ptr<const ZipLayout> zip_layout(const OpenFrame& frame)
 {
-    if (const char* choice = std::getenv("MODESTACK_EXR_READER"); choice && std::strcmp(choice, "openimageio") == 0)
-        return nullptr;
     const OIIO::ImageSpec& spec = frame.spec;
     CoreReadContext input(frame.file);
     ZipPart part;

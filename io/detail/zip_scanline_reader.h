@@ -25,8 +25,7 @@ struct ZipLayout {
 
 /// The layout of `frame`'s file when it is a single-part ZIP or ZIPS scanline
 /// file without subsampled channels, else nullptr (the caller reads with
-/// OpenImageIO). nullptr also when the environment sets
-/// MODESTACK_EXR_READER=openimageio.
+/// OpenImageIO).
 std::shared_ptr<const ZipLayout> zip_layout(const OpenFrame& frame);
 
 /// Reads rows [row_begin, row_end) (0 = the data window's first row) of channels

@@ -11,7 +11,6 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
-#include <cstdlib>
 #include <cstring>
 #include <map>
 #include <utility>
@@ -108,8 +107,6 @@ std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& pa
                                                            const std::vector<std::string>& extra_channels,
                                                            const std::vector<HeaderAttribute>& attributes)
 {
-    if (const char* choice = std::getenv("MODESTACK_EXR_WRITER"); choice && std::strcmp(choice, "openimageio") == 0)
-        return nullptr;
     const OIIO::ImageSpec& spec = source.spec;
     if (source.selected.empty())
         return nullptr;

@@ -22,9 +22,8 @@ public:
     /// channel and attribute; line order becomes increasing y) and appends
     /// `extra_channels` in the pixel type of `source`'s first selected channel,
     /// then `attributes`. nullptr when the source is not a single-part ZIP/ZIPS
-    /// scanline file, when OpenEXR's Core cannot build the header, or when the
-    /// environment sets MODESTACK_EXR_WRITER=openimageio: the caller then writes
-    /// with OpenImageIO. Throws Error when the header cannot be written.
+    /// scanline file or when OpenEXR's Core cannot build the header: the caller
+    /// then writes with OpenImageIO. Throws Error when the header cannot be written.
     static std::unique_ptr<ZipScanlineWriter> open(const std::string& path, const std::string& reported_path,
                                                    const OpenFrame& source,
                                                    const std::vector<std::string>& extra_channels,

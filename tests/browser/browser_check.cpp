@@ -3,7 +3,8 @@
 // a person would: no console errors, the spectrum plot is drawn, moving the rank
 // slider changes the displayed image (screenshots before and after, compared
 // pixel by pixel), the side-by-side panels zoom together and the exposure control
-// changes them. Exits 77 (ctest: skipped) when Chromium is not installed.
+// changes them. Reports itself skipped (testkit::report_skipped) when Chromium is
+// not installed.
 //
 // browser_check [--report FILE] [--save DIR]: without --report it makes a small
 // noisy sequence and its report in a temporary directory; --save keeps the
@@ -29,7 +30,6 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kSkipped = 77;
 constexpr int kWidth = 1400, kHeight = 1000;
 
 void check(bool condition, const std::string& what)
@@ -106,9 +106,9 @@ int run(int argc, char** argv)
     }
     const std::string chromium = browser::find_chromium();
     if (chromium.empty()) {
-        std::printf("SKIPPED: Chromium is not installed (Debian: apt-get install chromium; or set "
-                    "MODESTACK_CHROMIUM); the report was not opened in a browser\n");
-        return kSkipped;
+        testkit::report_skipped("Chromium is not installed (Debian: apt-get install chromium; or set "
+                                "MODESTACK_CHROMIUM); the report was not opened in a browser");
+        return 0;
     }
     auto start = std::chrono::steady_clock::now();
     testkit::TempDir directory;

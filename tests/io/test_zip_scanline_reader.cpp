@@ -13,7 +13,6 @@
 #include <openexr.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <fmt/format.h>
 #include <fstream>
@@ -30,11 +29,9 @@ namespace {
 std::unique_ptr<io::SequenceReader> open_reader(const std::string& pattern, const std::vector<std::string>& layers,
                                                 bool through_openimageio)
 {
-    if (through_openimageio)
-        setenv("MODESTACK_EXR_READER", "openimageio", 1);
-    auto reader = std::make_unique<io::SequenceReader>(io::find_input_sequence(pattern), layers);
-    unsetenv("MODESTACK_EXR_READER");
-    return reader;
+    return std::make_unique<io::SequenceReader>(io::find_input_sequence(pattern), layers,
+                                                through_openimageio ? io::ExrCodec::OpenImageIO
+                                                                    : io::ExrCodec::Libdeflate);
 }
 
 // Every band of `band_rows` rows from `first_row`, native and selected, both ways.

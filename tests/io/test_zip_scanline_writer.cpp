@@ -14,7 +14,6 @@
 
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <cstring>
 #include <fmt/format.h>
 #include <fstream>
@@ -55,16 +54,12 @@ void write_offset_frame(const std::string& path, int width, int height, const st
 // (with `through_openimageio`) through OpenImageIO.
 void write_output(const std::string& path, io::SequenceReader& reader, int band_rows, bool through_openimageio)
 {
-    if (through_openimageio)
-        setenv("MODESTACK_EXR_WRITER", "openimageio", 1);
-    else
-        unsetenv("MODESTACK_EXR_WRITER");
     const std::vector<std::string> extra{"sigma.R", "sigma.G", "sigma.B"};
     io::FrameOutput output(path, reader, 0, extra,
                            {io::HeaderAttribute::of_text("modestack:command", "modestack test"),
                             io::HeaderAttribute::of_integer("modestack:rank", 3),
-                            io::HeaderAttribute::of_real("modestack:seconds", 1.5)});
-    unsetenv("MODESTACK_EXR_WRITER");
+                            io::HeaderAttribute::of_real("modestack:seconds", 1.5)},
+                           through_openimageio ? io::ExrCodec::OpenImageIO : io::ExrCodec::Libdeflate);
     const int width = reader.width(), height = reader.height();
     const int selected = reader.selected_channel_count();
     std::vector<unsigned char> native;

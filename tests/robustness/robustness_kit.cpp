@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <csignal>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -175,9 +176,12 @@ std::vector<std::string> files_under(const std::string& directory, bool temporar
 std::vector<std::string> temporary_files(const std::string& directory) { return files_under(directory, true); }
 std::vector<std::string> final_files(const std::string& directory) { return files_under(directory, false); }
 
-BackgroundRun::BackgroundRun(const std::string& arguments, const std::string& stderr_path)
+BackgroundRun::BackgroundRun(const std::string& arguments, const std::string& stderr_path,
+                             const std::string& environment)
 {
-    std::string command = fmt::format("exec {} {} >/dev/null 2>{} </dev/null", MODESTACK_BINARY, arguments, stderr_path);
+    // `env` execs the binary in turn: the pid stays the binary's.
+    std::string command = fmt::format("exec env {} {} {} >/dev/null 2>{} </dev/null", environment, MODESTACK_BINARY,
+                                      arguments, stderr_path);
     m_pid = fork();
     if (m_pid < 0)
         throw std::runtime_error("fork failed");
@@ -224,6 +228,34 @@ bool BackgroundRun::running()
     }
     return true;
 }
+
+PausePoint::PausePoint(const std::string& call, const std::string& directory) : m_call(call), m_directory(directory)
+{
+    stdfs::create_directories(directory);
+}
+
+std::string PausePoint::environment() const
+{
+    // A sanitized binary wants its runtime first among the loaded libraries; the
+    // plain hook before it is harmless.
+    const char* asan_options = std::getenv("ASAN_OPTIONS");
+    std::string asan = asan_options && *asan_options ? std::string(asan_options) + ":" : std::string();
+    return fmt::format("LD_PRELOAD='{}' PAUSE_HOOK_AT='{}' PAUSE_HOOK_DIR='{}' ASAN_OPTIONS='{}verify_asan_link_order=0'",
+                       MODESTACK_PAUSE_HOOK, m_call, m_directory, asan);
+}
+
+bool PausePoint::wait_until_held(BackgroundRun& run) const
+{
+    const std::string held = m_directory + "/paused";
+    while (run.running()) {
+        if (stdfs::exists(held))
+            return true;
+        usleep(2000);
+    }
+    return stdfs::exists(held);
+}
+
+void PausePoint::release() const { std::ofstream(m_directory + "/resume").put('\n'); }
 
 TinyFilesystem::TinyFilesystem(const std::string& parent, const std::string& size, bool read_only)
     : m_path(parent + "/tiny")

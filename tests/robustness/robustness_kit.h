@@ -1,8 +1,8 @@
 // Helpers for the robustness tests: damaging a valid EXR at a chosen place of
 // its layout (header, offset table, a compressed chunk), listing what a run
 // left in an output directory (final names and temporary files), running the
-// binary in the background to signal it, and mounting a tiny tmpfs when the
-// tests run as root.
+// binary in the background to signal it (held at a chosen call until it is
+// signalled), and mounting a tiny tmpfs when the tests run as root.
 #pragma once
 
 #include <cstdint>
@@ -55,8 +55,9 @@ std::vector<std::string> final_files(const std::string& directory);
 /// `modestack` started in the background, stderr captured to a file.
 class BackgroundRun {
 public:
-    /// Starts `modestack <arguments>` (split by /bin/sh, which then execs the binary).
-    BackgroundRun(const std::string& arguments, const std::string& stderr_path);
+    /// Starts `modestack <arguments>` (split by /bin/sh, which then execs the
+    /// binary) with `environment` ("NAME=value ...", e.g. PausePoint's) added.
+    BackgroundRun(const std::string& arguments, const std::string& stderr_path, const std::string& environment = "");
     ~BackgroundRun();
     BackgroundRun(const BackgroundRun&) = delete;
     BackgroundRun& operator=(const BackgroundRun&) = delete;
@@ -72,6 +73,27 @@ private:
     int m_pid = -1;
     bool m_reaped = false;
     int m_status = 0;
+};
+
+/// A point where a BackgroundRun started with environment() stops until
+/// release(): the test's pause hook (pause_hook.cpp), preloaded into the binary.
+/// The signal a test sends while the run is held always lands, and lands while
+/// the run is where the test wants it.
+class PausePoint {
+public:
+    /// `call` is "rename:N" (after the Nth rename: N outputs committed) or
+    /// "libdeflate_zlib_compress:N" (before the Nth ZIP chunk written); the hook's
+    /// files go in `directory`, which is created.
+    PausePoint(const std::string& call, const std::string& directory);
+    std::string environment() const;
+    /// Waits until `run` is held at the point; false when it ended first.
+    bool wait_until_held(BackgroundRun& run) const;
+    /// Lets the run go on once no signal is pending for it (its handler ran).
+    void release() const;
+
+private:
+    std::string m_call;
+    std::string m_directory;
 };
 
 /// A tmpfs of `size` (mount option, e.g. "160k") mounted on a fresh directory

@@ -292,7 +292,7 @@ TEST_CASE("an unwritable output directory exits 1 naming it (read-only mount as 
     std::string target = read_only.path();
     if (!read_only.mounted()) {
         if (geteuid() == 0) {
-            MESSAGE("skipped: running as root and " << read_only.why_not());
+            testkit::report_skipped("running as root and " + read_only.why_not());
             return;
         }
         chmod(target.c_str(), 0555);

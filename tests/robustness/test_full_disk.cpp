@@ -1,7 +1,7 @@
 // Full disk (issue 12): runs that write into a tiny tmpfs mounted by the test
-// (as root; skipped with a message otherwise) end with exit 1 and one line
-// naming the output file, leave no temporary file, and every file left under a
-// final name is complete.
+// (as root; reported skipped, with the reason, otherwise) end with exit 1 and
+// one line naming the output file, leave no temporary file, and every file left
+// under a final name is complete.
 #include "tests/robustness/robustness_kit.h"
 #include "tests/tools/testkit.h"
 
@@ -56,7 +56,7 @@ TEST_CASE("full disk: denoise and render exit 1 naming the output, no temporary 
     TempDir dir;
     TinyFilesystem tiny(dir.path(), "96k");
     if (!tiny.mounted()) {
-        MESSAGE("skipped: " << tiny.why_not());
+        testkit::report_skipped(tiny.why_not());
         return;
     }
     testkit::ExrLayout layout;
@@ -82,7 +82,7 @@ TEST_CASE("full disk: the message says the disk is full")
     TempDir dir;
     TinyFilesystem tiny(dir.path(), "32k");
     if (!tiny.mounted()) {
-        MESSAGE("skipped: " << tiny.why_not());
+        testkit::report_skipped(tiny.why_not());
         return;
     }
     auto result = run_modestack("render --scene switch --size 64x48 --spp 1 --frames 1-12 -q -o " + tiny.path() +
@@ -96,7 +96,7 @@ TEST_CASE("full disk: a JSON summary that does not fit leaves neither a final no
     TempDir dir;
     TinyFilesystem tiny(dir.path(), "8k");
     if (!tiny.mounted()) {
-        MESSAGE("skipped: " << tiny.why_not());
+        testkit::report_skipped(tiny.why_not());
         return;
     }
     testkit::ExrLayout layout;

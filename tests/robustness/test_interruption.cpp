@@ -2,7 +2,9 @@
 // 130/143 and remove its temporary files; SIGKILL may leave temporary files but
 // never a final-named file that is incomplete; and a re-run with
 // --skip-existing completes the shot with the pixels of an uninterrupted run
-// and removes the temporaries the killed run left.
+// and removes the temporaries the killed run left. Each run is held by the
+// pause hook (robustness_kit.h, PausePoint) where it is writing until the test
+// has signalled it, so every signal lands there whatever the machine's speed.
 #include "tests/robustness/robustness_kit.h"
 #include "tests/tools/testkit.h"
 
@@ -10,7 +12,6 @@
 
 #include <chrono>
 #include <csignal>
-#include <thread>
 
 using namespace modestack;
 using namespace modestack::robustness;
@@ -37,18 +38,6 @@ std::vector<int> all_frames()
     return frames;
 }
 
-// Waits until `directory` holds a temporary file (the run is writing) or the run ended.
-bool wait_for_temporary_file(BackgroundRun& run, const std::string& directory)
-{
-    auto deadline = Clock::now() + std::chrono::seconds(60);
-    while (Clock::now() < deadline && run.running()) {
-        if (!temporary_files(directory).empty())
-            return true;
-        std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    return false;
-}
-
 // Every final-named file in `directory` has the pixels of the same file in `reference`.
 void check_complete(const std::string& directory, const std::string& reference)
 {
@@ -64,9 +53,12 @@ TEST_CASE("denoise: SIGINT/SIGTERM exit 130/143 leaving nothing, SIGKILL leaves 
           "--skip-existing completes the shot")
 {
     TempDir dir;
+    // 272 rows: pass 2 writes in three bands of at most 128 rows, and a band after
+    // the held one checks the cancel flag (a signal during the last band's writes
+    // lets the run finish).
     testkit::ExrLayout layout;
-    layout.width = 160;
-    layout.height = 120;
+    layout.width = 96;
+    layout.height = 272;
     testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout, noisy_value);
     std::string input = "denoise " + dir.file("in.####.exr") + " -q --threads 2 -o ";
     auto reference = run_modestack(input + dir.file("ref/d.####.exr"));
@@ -76,16 +68,18 @@ TEST_CASE("denoise: SIGINT/SIGTERM exit 130/143 leaving nothing, SIGKILL leaves 
     for (int signal_number : {SIGINT, SIGTERM, SIGKILL}) {
         CAPTURE(signal_number);
         std::string out = dir.file("out" + std::to_string(signal_number));
-        BackgroundRun run(input + out + "/d.####.exr", dir.file("err"));
-        bool writing = wait_for_temporary_file(run, out);
+        // Held before its first ZIP chunk: every output is open under its temporary
+        // name. One thread, so that no other thread finishes the shot meanwhile.
+        PausePoint writing("libdeflate_zlib_compress:1", dir.file("pause" + std::to_string(signal_number)));
+        BackgroundRun run("denoise " + dir.file("in.####.exr") + " -q --threads 1 -o " + out + "/d.####.exr",
+                          dir.file("err"), writing.environment());
+        REQUIRE(writing.wait_until_held(run));
+        CHECK(!temporary_files(out).empty());
         auto signalled = Clock::now();
         run.signal(signal_number);
+        writing.release();
         int code = run.wait();
         double seconds = std::chrono::duration<double>(Clock::now() - signalled).count();
-        if (!writing) {
-            MESSAGE("the run ended before it wrote anything (exit " << code << "); machine too fast for this size");
-            continue;
-        }
         MESSAGE("signal " << signal_number << ": exit " << code << " after " << seconds << " s, "
                           << final_files(out).size() << " final and " << temporary_files(out).size()
                           << " temporary files left");
@@ -119,23 +113,21 @@ TEST_CASE("render: SIGINT/SIGTERM between frames exit 130/143 leaving no tempora
     for (int signal_number : {SIGINT, SIGTERM, SIGKILL}) {
         CAPTURE(signal_number);
         std::string out = dir.file("out" + std::to_string(signal_number));
-        BackgroundRun run(render + out + "/r.####.exr", dir.file("err"));
-        // Wait for the second frame to be on disk, then interrupt in the middle of the shot.
-        auto deadline = Clock::now() + std::chrono::seconds(60);
-        while (Clock::now() < deadline && run.running() && final_files(out).size() < 2)
-            std::this_thread::sleep_for(std::chrono::milliseconds(5));
+        // Held once the second frame is renamed into place: interrupted in the middle of the shot.
+        PausePoint second_frame("rename:2", dir.file("pause" + std::to_string(signal_number)));
+        BackgroundRun run(render + out + "/r.####.exr", dir.file("err"), second_frame.environment());
+        REQUIRE(second_frame.wait_until_held(run));
         run.signal(signal_number);
+        second_frame.release();
         int code = run.wait();
         size_t finished = final_files(out).size();
         MESSAGE("signal " << signal_number << ": exit " << code << ", " << finished << " of 24 frames finished");
-        if (finished == 24 && code == 0)
-            continue;  // too fast to interrupt here: nothing to check
         CHECK(code == 128 + signal_number);
+        CHECK(finished == 2);
         if (signal_number != SIGKILL) {
             CHECK(one_line(read_bytes(dir.file("err"))));
             CHECK(temporary_files(out).empty());
         }
-        CHECK(finished < 24);
         check_complete(out, dir.file("ref"));
 
         // The re-run renders only what is missing; its JSON names the frames it skipped.

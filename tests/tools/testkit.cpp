@@ -135,6 +135,12 @@ CliResult run_modestack_under(const std::string& launcher, const std::string& ar
     return result;
 }
 
+void report_skipped(const std::string& reason)
+{
+    std::printf("%s %s\n", kSkippedMarker, reason.c_str());
+    std::fflush(stdout);
+}
+
 std::string read_text(const std::string& path)
 {
     std::ifstream file(path);

@@ -63,6 +63,15 @@ CliResult run_modestack(const std::string& arguments);
 /// Runs `<launcher> modestack <arguments>`, e.g. under "mpirun -n 2".
 CliResult run_modestack_under(const std::string& launcher, const std::string& arguments);
 
+/// The line that reports a test as skipped: what ctest's SKIP_REGULAR_EXPRESSION
+/// looks for (tests/CMakeLists.txt).
+inline constexpr const char* kSkippedMarker = "SKIPPED:";
+/// Reports that the running test cannot check what it claims here, and why:
+/// prints "SKIPPED: <reason>" on stdout, which ctest shows as skipped rather than
+/// passed. The caller returns right after (a test binary run by hand goes on
+/// with its other test cases).
+void report_skipped(const std::string& reason);
+
 /// A file's whole contents ("" when it cannot be opened).
 std::string read_text(const std::string& path);
 
