@@ -1,5 +1,4 @@
-target_sources(modestack PRIVATE
-  ${CMAKE_CURRENT_LIST_DIR}/main.cpp
+target_sources(modestack_app PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/command_line.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_context.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_info.cpp
