@@ -2,13 +2,16 @@
 // Renders the noisy pass of a built-in scene, denoises its indirect layer (auto
 // rank), refines the unsure pixels at high spp, composites the final beauty
 // = DiffCol × (DiffDir + DiffInd) + Emit ([0017]) and writes a summary and a
-// contact sheet. Each stage is the very subcommand a user would type (run in
-// this process, not spawned), so `run` and the stages by hand give the same
-// files. With --reference-spp it also renders a reference and measures relMSE,
+// contact sheet. Each stage is the library call behind the subcommand a user
+// would type (render_job.h, denoise_job.h, refine_job.h), given the options
+// the user would type, so `run` and the stages by hand give the same files; run
+// reads what it reports from the results they return. With --reference-spp it also renders a reference and measures relMSE,
 // equivalent spp and the equal-quality speed-up as DESIGN.md defines them.
 // The contact sheet goes through the OCIO config's display/view.
 #include "app/command.h"
-#include "app/report/denoise_report.h"
+#include "app/denoise_job.h"
+#include "app/refine_job.h"
+#include "app/render_job.h"
 #include "app/report/html_report.h"
 #include "app/run_composite.h"
 #include "app/run_context.h"
@@ -28,9 +31,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 
 namespace modestack::app {
@@ -56,36 +59,8 @@ struct RunOptions {
     CommonOptions common;
 };
 
-// Runs one stage as its subcommand, with the common options passed on.
-void run_stage(std::vector<std::string> arguments, const CommonOptions& common)
-{
-    if (common.threads > 0)
-        arguments.insert(arguments.end(), {"--threads", std::to_string(common.threads)});
-    if (common.quiet)
-        arguments.push_back("--quiet");
-    CLI::App cli{"modestack", "modestack"};
-    cli.require_subcommand(1);
-    std::vector<Subcommand> stages{add_render_command(cli), add_denoise_command(cli),
-                                   add_refine_command(cli)};
-    std::vector<std::string> reversed(arguments.rbegin(), arguments.rend());
-    try {
-        cli.parse(reversed);
-    } catch (const CLI::ParseError& error) {
-        throw internal_error(
-            fmt::format("run built a bad '{}' command: {}", arguments.front(), error.what()));
-    }
-    for (auto& stage : stages)
-        if (stage.cli->parsed() && stage.run() != 0)
-            throw bad_input(arguments.front(), "stage failed");
-}
-
-Json read_json(const std::string& path)
-{
-    std::ifstream stream(path);
-    if (!stream)
-        throw bad_input(path, "cannot read a stage's JSON summary");
-    return Json::parse(stream);
-}
+// Writes a stage's --json summary into run's json/ directory.
+void write_json(const std::string& path, const Json& json) { io::write_text_file(path, json.dump(2) + "\n"); }
 
 double seconds_since(std::chrono::steady_clock::time_point start)
 {
@@ -97,16 +72,17 @@ std::string sequence_path(const RunOptions& options, const std::string& kind)
     return (stdfs::path(options.directory) / kind / (options.scene + ".####.exr")).string();
 }
 
-// Frames shown on the contact sheet: four spread over the shot; for `switch` one
-// of them is the middle of the crossing, where the denoiser fails.
-std::vector<int> sheet_frame_indices(const std::vector<int>& frames, const std::string& scene)
+// Frames shown on the contact sheet: four spread over the shot; when the scene
+// has a brief event (SceneInfo::highlight_frames, e.g. switch's crossing, where
+// the denoiser fails), one of them is its middle frame.
+std::vector<int> sheet_frame_indices(const std::vector<int>& frames, const scene::FrameSpan& highlight)
 {
     std::vector<int> indices;
     int count = static_cast<int>(frames.size());
     for (int k = 0; k < std::min(4, count); ++k)
         indices.push_back(count == 1 ? 0 : k * (count - 1) / std::max(1, std::min(4, count) - 1));
-    if (scene == "switch") {
-        int middle = (scene::kSwitchCrossingFirstFrame + scene::kSwitchCrossingLastFrame) / 2;
+    if (!highlight.empty()) {
+        int middle = (highlight.first + highlight.last) / 2;
         auto found = std::find(frames.begin(), frames.end(), middle);
         if (found != frames.end() && indices.size() > 1)
             indices[1] = static_cast<int>(found - frames.begin());
@@ -114,6 +90,20 @@ std::vector<int> sheet_frame_indices(const std::vector<int>& frames, const std::
     std::sort(indices.begin(), indices.end());
     indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
     return indices;
+}
+
+// The render stage's options: the shot as run renders it.
+RenderCommandOptions render_options(const RunOptions& options, const std::string& output, int spp, int seed,
+                                    const std::string& frame_range)
+{
+    RenderCommandOptions render;
+    render.scene = options.scene;
+    render.size = options.size;
+    render.frames = frame_range;
+    render.output = output;
+    render.render.spp = spp;
+    render.render.seed = static_cast<std::uint64_t>(seed);
+    return render;
 }
 
 int run_run(const RunOptions& options)
@@ -145,54 +135,48 @@ int run_run(const RunOptions& options)
                       final_path = sequence_path(options, "final"), masks = sequence_path(options, "masks"),
                       reference = sequence_path(options, "reference");
     auto json_file = [&](const char* name) { return (json_directory / name).string(); };
-    std::vector<std::string> scene_options{"--scene",    options.scene, "--size",
-                                           options.size, "--frames",    frame_range};
 
     Json seconds;
     auto stage_start = std::chrono::steady_clock::now();
-    std::vector<std::string> render_arguments{"render",
-                                              "-o",
-                                              noisy,
-                                              "--spp",
-                                              std::to_string(options.spp),
-                                              "--seed",
-                                              "1",
-                                              "--json",
-                                              json_file("render.json")};
-    render_arguments.insert(render_arguments.end(), scene_options.begin(), scene_options.end());
-    run_stage(render_arguments, options.common);
+    const RenderResult noisy_render =
+        render(make_render_job(render_options(options, noisy, options.spp, 1, frame_range)), options.common);
+    write_json(json_file("render.json"), render_json(noisy_render));
     seconds["render"] = seconds_since(stage_start);
 
     stage_start = std::chrono::steady_clock::now();
     // The renderer writes scene-linear Rec.709, which the denoiser reads as such.
     const std::string report_path = (directory / "report.html").string();
-    run_stage({"denoise", noisy, "--frames", frame_range, "--layer", "DiffInd", "-o", denoised, "--json",
-               json_file("denoise.json"), "--ocio-config", color_config.path(), "--report", report_path},
-              options.common);
-    // The stage wrote its page already; run completes it below (with refine and the reference).
-    std::optional<app::report::ReportData> report_data = app::report::take_published_report();
+    DenoiseCommandOptions denoise_options;
+    denoise_options.input = noisy;
+    denoise_options.frames = frame_range;
+    denoise_options.layers = {"DiffInd"};
+    denoise_options.output = denoised;
+    denoise_options.ocio_config = color_config.path();
+    denoise_options.report_path = report_path;
+    // The stage writes its page already; run completes it below (with refine and the reference).
+    DenoiseResult denoise_result = denoise(make_denoise_job(denoise_options, nullptr), options.common);
+    write_json(json_file("denoise.json"), denoise_json(denoise_result));
+    if (!options.common.quiet)
+        print_denoise_summary(denoise_result);
     seconds["denoise"] = seconds_since(stage_start);
 
     stage_start = std::chrono::steady_clock::now();
-    std::vector<std::string> refine_arguments{"refine",
-                                              "--denoised",
-                                              denoised,
-                                              "-o",
-                                              refined,
-                                              "--masks",
-                                              masks,
-                                              "--spp",
-                                              std::to_string(options.refine_spp),
-                                              "--json",
-                                              json_file("refine.json")};
+    RefineCommandOptions refine_options;
+    refine_options.scene = options.scene;
+    refine_options.size = options.size;
+    refine_options.frames = frame_range;
+    refine_options.denoised = denoised;
+    refine_options.output = refined;
+    refine_options.masks = masks;
+    refine_options.settings.render.spp = options.refine_spp;
     if (options.threshold > 0)
-        refine_arguments.insert(refine_arguments.end(),
-                                {"--threshold", fmt::format("{}", options.threshold)});
+        refine_options.threshold = options.threshold;
     else
-        refine_arguments.insert(refine_arguments.end(),
-                                {"--budget", fmt::format("{}", options.budget_percent)});
-    refine_arguments.insert(refine_arguments.end(), scene_options.begin(), scene_options.end());
-    run_stage(refine_arguments, options.common);
+        refine_options.budget_percent = options.budget_percent;
+    const RefineResult refine_result = refine(make_refine_job(refine_options), options.common);
+    write_json(json_file("refine.json"), refine_json(refine_result));
+    if (!options.common.quiet)
+        print_refine_summary(refine_result);
     seconds["refine"] = seconds_since(stage_start);
 
     RunContext context(options.common);
@@ -206,25 +190,17 @@ int run_run(const RunOptions& options)
                          seconds["refine"].get<double>() + seconds["composite"].get<double>();
     seconds["total"] = our_seconds;
 
+    std::optional<RenderResult> reference_render;
     if (options.reference_spp > 0) {
         stage_start = std::chrono::steady_clock::now();
-        std::vector<std::string> reference_arguments{"render",
-                                                     "-o",
-                                                     reference,
-                                                     "--spp",
-                                                     std::to_string(options.reference_spp),
-                                                     "--seed",
-                                                     "3",
-                                                     "--json",
-                                                     json_file("reference.json")};
-        reference_arguments.insert(reference_arguments.end(), scene_options.begin(), scene_options.end());
-        run_stage(reference_arguments, options.common);
+        reference_render = render(
+            make_render_job(render_options(options, reference, options.reference_spp, 3, frame_range)),
+            options.common);
+        write_json(json_file("reference.json"), render_json(*reference_render));
         seconds["reference"] = seconds_since(stage_start);
     }
 
-    Json denoise_json = read_json(json_file("denoise.json")),
-         refine_json = read_json(json_file("refine.json"));
-    Json render_json = read_json(json_file("render.json"));
+    const int rank = denoise_result.report.rank.rank;
     Json summary;
     summary["version"] = version_string();
     summary["command"] = command_line();
@@ -233,13 +209,14 @@ int run_run(const RunOptions& options)
     summary["size"] = options.size;
     summary["spp"] = options.spp;
     summary["refine_spp"] = options.refine_spp;
-    summary["rank"] = denoise_json["rank"]["n"];
-    summary["rank_rule"] = denoise_json["rank"]["rule"];
-    summary["refine_selection"] = refine_json["selection"];
-    summary["refine_budget_percent"] = refine_json["budget_percent"];
-    summary["refine_threshold"] = refine_json["threshold"];
-    summary["pixels_refined"] = refine_json["pixels_rendered"];
-    summary["percent_pixels_refined"] = refine_json["percent_rendered"];
+    summary["rank"] = rank;
+    summary["rank_rule"] = denoise_result.report.rank.rule;
+    const bool by_budget = refine_result.budget_percent >= 0;
+    summary["refine_selection"] = by_budget ? "budget" : "threshold";
+    summary["refine_budget_percent"] = by_budget ? Json(refine_result.budget_percent) : Json();
+    summary["refine_threshold"] = std::isfinite(refine_result.threshold) ? Json(refine_result.threshold) : Json();
+    summary["pixels_refined"] = refine_result.pixels_rendered;
+    summary["percent_pixels_refined"] = refine_result.percent_rendered;
     summary["seconds"] = seconds;
     summary["outputs"] = {
         {"noisy", noisy},     {"denoised", denoised},
@@ -264,7 +241,7 @@ int run_run(const RunOptions& options)
     }
     // [layer 0 = DiffInd, 1 = beauty][version][frame]
     std::vector<std::vector<std::vector<double>>> errors(2, std::vector<std::vector<double>>(3));
-    std::vector<int> sheet = sheet_frame_indices(frames, options.scene);
+    std::vector<int> sheet = sheet_frame_indices(frames, info->highlight_frames);
     std::vector<std::vector<float>> sheet_images;
     for (int i = 0; i < static_cast<int>(frames.size()); ++i) {
         bool on_sheet = std::find(sheet.begin(), sheet.end(), i) != sheet.end();
@@ -317,16 +294,15 @@ int run_run(const RunOptions& options)
                                 {"view", display.view()},
                                 {"exposure", options.exposure}};
 
-    if (reference_beauty) {
-        Json reference_json = read_json(json_file("reference.json"));
-        summary["quality"] = quality_summary(options.scene, frames, errors, seconds,
-                                             {options.spp, render_json["render_seconds"].get<double>()},
-                                             {options.reference_spp, reference_json["render_seconds"].get<double>()});
-    }
-    if (report_data) {
-        complete_report(*report_data, options.scene, final_indirect, io::find_input_sequence(masks, frame_range), errors,
-                        seconds);
-        app::report::write_report(report_path, *report_data);
+    if (reference_render)
+        summary["quality"] =
+            quality_summary(info->highlight_frames, frames, errors, seconds,
+                            {options.spp, noisy_render.render_seconds},
+                            {options.reference_spp, reference_render->render_seconds});
+    if (denoise_result.report_page) {
+        complete_report(*denoise_result.report_page, options.scene, final_indirect,
+                        io::find_input_sequence(masks, frame_range), errors, seconds);
+        app::report::write_report(report_path, *denoise_result.report_page);
     }
     summary["seconds"]["wall"] = seconds_since(start);
     io::write_text_file((directory / "summary.json").string(), summary.dump(2) + "\n");
@@ -334,8 +310,7 @@ int run_run(const RunOptions& options)
         std::fprintf(stderr,
                      "run: %s, %zu frames, N = %d modes, %.2f %% of pixels refined, %.1f s (render %.1f, "
                      "denoise %.1f, refine %.1f, composite %.1f)\n",
-                     options.scene.c_str(), frames.size(), summary["rank"].get<int>(),
-                     summary["percent_pixels_refined"].get<double>(), our_seconds,
+                     options.scene.c_str(), frames.size(), rank, refine_result.percent_rendered, our_seconds,
                      seconds["render"].get<double>(), seconds["denoise"].get<double>(),
                      seconds["refine"].get<double>(), seconds["composite"].get<double>());
         std::fprintf(stderr, "run: results in %s (summary.json, contact_sheet.png, final/, refined/, ...)\n",

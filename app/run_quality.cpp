@@ -1,7 +1,6 @@
 #include "app/run_quality.h"
 
 #include "core/refine/equal_quality.h"
-#include "core/scene/builtin_scenes.h"
 
 #include <cmath>
 
@@ -9,7 +8,7 @@ namespace modestack::app {
 
 using Json = nlohmann::ordered_json;
 
-Json quality_summary(const std::string& scene_name, const std::vector<int>& frames,
+Json quality_summary(const scene::FrameSpan& highlight_frames, const std::vector<int>& frames,
                      const std::vector<std::vector<std::vector<double>>>& errors, const Json& seconds,
                      RenderTiming noisy, RenderTiming reference)
 {
@@ -37,8 +36,7 @@ Json quality_summary(const std::string& scene_name, const std::vector<int>& fram
     std::vector<bool> all(frames.size(), true), crossing(frames.size(), false);
     bool has_crossing = false;
     for (size_t t = 0; t < frames.size(); ++t)
-        if (scene_name == "switch" && frames[t] >= scene::kSwitchCrossingFirstFrame &&
-            frames[t] <= scene::kSwitchCrossingLastFrame)
+        if (highlight_frames.contains(frames[t]))
             crossing[t] = has_crossing = true;
     const char* kLayers[] = {"DiffInd", "beauty"};
     for (int layer = 0; layer < 2; ++layer) {

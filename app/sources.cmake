@@ -3,9 +3,13 @@ target_sources(modestack_app PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/run_context.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_info.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_denoise.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/denoise_job.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_render.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/render_job.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/scene_frames.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene_source.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_refine.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/refine_job.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_run.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_composite.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_quality.cpp

@@ -259,7 +259,7 @@ TEST_CASE("render and run: options out of range exit 2, unknown scene 2, a file 
         {"render --scene orbit --max-depth 0" + out, 2, "--max-depth"},
         {"render --scene ''" + out, 2, "unknown scene ''"},
         {"render --scene Orbit" + out, 2, "unknown scene 'Orbit'"},
-        {"render --scene orbit --frames 0" + out, 2, "not 0"},
+        {"render --scene orbit --frames 0" + out, 2, "frame 0 is outside scene 'orbit' (frames 1-48)"},
         {"render --scene orbit --frames 1-3 -q -o " + dir.file("out/r.exr"), 2, "has no frame token"},
         {render + " --frames 1 -q -o " + dir.file("file/r.####.exr"), 1, "file: output directory is a file"},
         {render + " --mask " + dir.file(damaged_name(2) + ".####.exr") + " --frames 3" + out, 1,
@@ -267,7 +267,7 @@ TEST_CASE("render and run: options out of range exit 2, unknown scene 2, a file 
         {"run --scene switch --size 0x0 --frames 1-3 -q -o " + dir.file("out"), 2, "--size '0x0'"},
         {"run --scene nowhere -q -o " + dir.file("out"), 2, "unknown scene 'nowhere'"},
         {"run --scene switch --frames 1-2 -q -o " + dir.file("out"), 2, "give at least 3 frames"},
-        {"run --scene switch --frames 47-50 -q -o " + dir.file("out"), 2, "not 49"},
+        {"run --scene switch --frames 47-50 -q -o " + dir.file("out"), 2, "frame 49 is outside scene 'switch'"},
         {"run --scene switch --spp -1 -q -o " + dir.file("out"), 2, "--spp"},
         {"run --scene switch --budget 101 -q -o " + dir.file("out"), 2, "--budget"},
     };
