@@ -74,8 +74,8 @@ Subcommand add_denoise_command(CLI::App& parent)
     command->add_option("--firefly-k", options->firefly_k,
                         "Firefly threshold: temporal median + k x 1.4826 x MAD of the pixel")
         ->check(CLI::PositiveNumber);
-    command->add_option("--sigma-radius", options->sigma_radius, "Spatial pooling radius of sigma, in pixels")
-        ->check(CLI::NonNegativeNumber);
+    command->add_option("--sigma-radius", options->sigma_radius,
+                        "Spatial pooling radius of sigma, in pixels (0 or more)");
     command->add_flag("--mode-filter", options->mode_filter,
                       "Filter the spatial modes in space before the rebuild (the default): per mode, the width (and "
                       "edge-aware guided filter from the first mode) with the lowest SURE risk; with --rank auto, N "

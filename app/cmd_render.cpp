@@ -6,14 +6,9 @@
 #include "app/run_context.h"
 #include "io/text_output.h"
 
-#include <limits>
-
 namespace modestack::app {
 namespace {
 
-// A whole number of at least 1; CLI::PositiveNumber would print "not in range 0
-// to" the largest double, in full.
-const CLI::Range kAtLeastOne(1, std::numeric_limits<int>::max(), "at least 1");
 
 struct RenderCommand {
     RenderCommandOptions options;

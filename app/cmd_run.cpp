@@ -117,8 +117,8 @@ int run_run(const RunOptions& options)
         scene::make_builtin_scene(options.scene, 1); // throws the error listing the scenes
     std::vector<int> frames = io::parse_frame_range(
         options.frames.empty() ? fmt::format("{}-{}", info->first_frame, info->last_frame) : options.frames);
-    if (frames.size() < 3)
-        throw usage_error("--frames: run denoises a shot, give at least 3 frames");
+    if (frames.size() < kMinimumShotFrames)
+        throw usage_error("--frames: " + too_few_frames(frames.size()));
     const std::string frame_range = io::describe_frames(frames);
     // Checked before any work: a bad config, display or view fails at once.
     const io::ColorConfig color_config(io::locate_color_config(options.ocio_config));

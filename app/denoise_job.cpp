@@ -80,6 +80,8 @@ denoise::Settings make_settings(const DenoiseCommandOptions& options)
     }
     settings.outliers.fireflies = !options.no_firefly_clamp;
     settings.outliers.firefly_k = options.firefly_k;
+    if (options.sigma_radius < 0)
+        throw usage_error("--sigma-radius must be 0 or more");
     settings.sigma_radius = options.sigma_radius;
     if (options.mode_filter && options.no_mode_filter)
         throw usage_error("--mode-filter and --no-mode-filter contradict each other: give one");
@@ -316,6 +318,11 @@ nlohmann::ordered_json object_space_json(const DenoiseResult& result)
 
 }  // namespace
 
+std::string too_few_frames(std::size_t frame_count)
+{
+    return fmt::format("denoising needs at least {} frames, found {}", kMinimumShotFrames, frame_count);
+}
+
 DenoiseJob make_denoise_job(const DenoiseCommandOptions& options, const CLI::App* command)
 {
     if (!options.object_space.empty())
@@ -356,13 +363,16 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
         if (job.stage_command == nullptr)
             throw internal_error("a --stage task needs its command for the shot's fingerprint");
         staged.emplace(job.stage, *job.stage_command);
+        if (settings.solver == denoise::Solver::RandomizedSvd)
+            throw usage_error(fmt::format("--stage {}: the farm stages use the gram solver, not --method rsvd",
+                                          denoise::stage_name(staged->stage())));
     }
     const bool writes_frames = !staged || staged->writes_frames();
     io::FrameSequence input =
         io::find_input_sequence(job.input, staged ? staged->shot_frames(job.frames) : job.frames);
     io::FrameSequence output = writes_frames ? io::output_sequence(job.output, input.frames) : io::FrameSequence{};
-    if (input.frames.size() < 3)
-        throw bad_input(job.input, fmt::format("denoising needs at least 3 frames, found {}", input.frames.size()));
+    if (input.frames.size() < kMinimumShotFrames)
+        throw bad_input(job.input, too_few_frames(input.frames.size()));
     if (settings.rank.rule == lowrank::RankRule::Fixed &&
         settings.rank.fixed_rank >= static_cast<int>(input.frames.size()))
         throw bad_input(job.input, fmt::format("--rank {} needs more than {} frames (use 1 to {})",

@@ -118,6 +118,11 @@ struct DenoiseResult {
     std::optional<report::ReportData> report_page;
 };
 
+/// The fewest frames a shot to denoise may have (run checks its --frames against it too).
+inline constexpr std::size_t kMinimumShotFrames = 3;
+/// The one message for a shot of fewer frames: "denoising needs at least 3 frames, found 2".
+std::string too_few_frames(std::size_t frame_count);
+
 /// The validation step of `denoise`: usage errors, one per rule, for every
 /// option value and combination. `command` (may be null) is the parsed denoise
 /// command, which --stage fingerprints.

@@ -266,7 +266,7 @@ TEST_CASE("render and run: options out of range exit 2, unknown scene 2, a file 
          damaged_name(2) + ".0003.exr"},
         {"run --scene switch --size 0x0 --frames 1-3 -q -o " + dir.file("out"), 2, "--size '0x0'"},
         {"run --scene nowhere -q -o " + dir.file("out"), 2, "unknown scene 'nowhere'"},
-        {"run --scene switch --frames 1-2 -q -o " + dir.file("out"), 2, "give at least 3 frames"},
+        {"run --scene switch --frames 1-2 -q -o " + dir.file("out"), 2, "--frames: denoising needs at least 3 frames, found 2"},
         {"run --scene switch --frames 47-50 -q -o " + dir.file("out"), 2, "frame 49 is outside scene 'switch'"},
         {"run --scene switch --spp -1 -q -o " + dir.file("out"), 2, "--spp"},
         {"run --scene switch --budget 101 -q -o " + dir.file("out"), 2, "--budget"},
