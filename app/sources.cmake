@@ -15,6 +15,7 @@ target_sources(modestack_app PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/run_quality.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_report.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_compare.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/compare_job.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sequence_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/color_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/memory_budget.cpp
