@@ -5,8 +5,9 @@
 // contact sheet. Each stage is the library call behind the subcommand a user
 // would type (render_job.h, denoise_job.h, refine_job.h), given the options
 // the user would type, so `run` and the stages by hand give the same files; run
-// reads what it reports from the results they return. With --reference-spp it also renders a reference and measures relMSE,
-// equivalent spp and the equal-quality speed-up as DESIGN.md defines them.
+// reads what it reports from the results they return. With --reference-spp it
+// also renders a reference and measures relMSE, equivalent spp and the
+// equal-quality speed-up (docs/design.md, "How we measure quality").
 // The contact sheet goes through the OCIO config's display/view.
 #include "app/command.h"
 #include "app/denoise_job.h"
@@ -17,11 +18,10 @@
 #include "app/run_context.h"
 #include "app/run_quality.h"
 #include "app/run_report.h"
+#include "app/run_sheet.h"
 #include "core/common/error.h"
-#include "core/refine/equal_quality.h"
 #include "core/scene/builtin_scenes.h"
 #include "io/color_management.h"
-#include "io/contact_sheet.h"
 #include "io/frame_output.h"
 #include "io/sequence.h"
 #include "io/sequence_reader.h"
@@ -30,7 +30,6 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <algorithm>
 #include <cmath>
 #include <chrono>
 #include <filesystem>
@@ -70,26 +69,6 @@ double seconds_since(std::chrono::steady_clock::time_point start)
 std::string sequence_path(const RunOptions& options, const std::string& kind)
 {
     return (stdfs::path(options.directory) / kind / (options.scene + ".####.exr")).string();
-}
-
-// Frames shown on the contact sheet: four spread over the shot; when the scene
-// has a brief event (SceneInfo::highlight_frames, e.g. switch's crossing, where
-// the denoiser fails), one of them is its middle frame.
-std::vector<int> sheet_frame_indices(const std::vector<int>& frames, const scene::FrameSpan& highlight)
-{
-    std::vector<int> indices;
-    int count = static_cast<int>(frames.size());
-    for (int k = 0; k < std::min(4, count); ++k)
-        indices.push_back(count == 1 ? 0 : k * (count - 1) / std::max(1, std::min(4, count) - 1));
-    if (!highlight.empty()) {
-        int middle = (highlight.first + highlight.last) / 2;
-        auto found = std::find(frames.begin(), frames.end(), middle);
-        if (found != frames.end() && indices.size() > 1)
-            indices[1] = static_cast<int>(found - frames.begin());
-    }
-    std::sort(indices.begin(), indices.end());
-    indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
-    return indices;
 }
 
 // The render stage's options: the shot as run renders it.
@@ -225,67 +204,14 @@ int run_run(const RunOptions& options)
         {"report", report_path}};
 
     // Measurements against the reference, and the contact sheet.
-    io::FrameSequence noisy_sequence = io::find_input_sequence(noisy, frame_range);
-    io::FrameSequence denoised_sequence = io::find_input_sequence(denoised, frame_range);
-    io::SequenceReader noisy_passes(noisy_sequence, kPassLayers), noisy_beauty(noisy_sequence, {"Combined"});
-    io::SequenceReader denoised_indirect(denoised_sequence, {"DiffInd"});
-    io::SequenceReader final_beauty(final_sequence, {"Combined"}),
-        final_indirect(final_sequence, {"DiffInd"});
-    std::unique_ptr<io::SequenceReader> reference_beauty, reference_indirect;
-    if (options.reference_spp > 0) {
-        io::FrameSequence reference_sequence = io::find_input_sequence(reference, frame_range);
-        reference_beauty =
-            std::make_unique<io::SequenceReader>(reference_sequence, std::vector<std::string>{"Combined"});
-        reference_indirect =
-            std::make_unique<io::SequenceReader>(reference_sequence, std::vector<std::string>{"DiffInd"});
-    }
-    // [layer 0 = DiffInd, 1 = beauty][version][frame]
-    std::vector<std::vector<std::vector<double>>> errors(2, std::vector<std::vector<double>>(3));
-    std::vector<int> sheet = sheet_frame_indices(frames, info->highlight_frames);
-    std::vector<std::vector<float>> sheet_images;
-    for (int i = 0; i < static_cast<int>(frames.size()); ++i) {
-        bool on_sheet = std::find(sheet.begin(), sheet.end(), i) != sheet.end();
-        if (!on_sheet && !reference_beauty)
-            continue;
-        std::vector<float> passes = read_frame(noisy_passes, i);
-        std::vector<float> indirect[3] = {std::vector<float>(passes.size() / 4),
-                                          read_frame(denoised_indirect, i), read_frame(final_indirect, i)};
-        for (std::size_t p = 0; p < indirect[0].size() / 3; ++p)
-            for (int c = 0; c < 3; ++c)
-                indirect[0][p * 3 + c] = passes[p * 12 + 6 + c];
-        std::vector<float> beauty[3] = {read_frame(noisy_beauty, i), composite(passes, indirect[1].data()),
-                                        read_frame(final_beauty, i)};
-        std::vector<float> reference_rgb;
-        if (reference_beauty) {
-            reference_rgb = read_frame(*reference_beauty, i);
-            std::vector<float> reference_indirect_rgb = read_frame(*reference_indirect, i);
-            for (int v = 0; v < 3; ++v) {
-                errors[0][v].push_back(refine::relative_mse(indirect[v].data(), reference_indirect_rgb.data(),
-                                                            indirect[v].size()));
-                errors[1][v].push_back(
-                    refine::relative_mse(beauty[v].data(), reference_rgb.data(), beauty[v].size()));
-            }
-        }
-        if (on_sheet) {
-            for (int v = 0; v < 3; ++v)
-                sheet_images.push_back(beauty[v]);
-            if (reference_beauty)
-                sheet_images.push_back(reference_rgb);
-        }
-    }
-    int columns = reference_beauty ? 4 : 3;
-    std::vector<io::ContactSheetCell> cells;
-    for (const auto& image : sheet_images)
-        cells.push_back({noisy_passes.width(), noisy_passes.height(), image.data()});
-    io::write_contact_sheet((directory / "contact_sheet.png").string(), columns, cells, display);
-    summary["contact_sheet"] = {{"frames",
-                                 [&] {
-                                     std::vector<int> shown;
-                                     for (int i : sheet)
-                                         shown.push_back(frames[i]);
-                                     return shown;
-                                 }()},
-                                {"columns", reference_beauty
+    RunSequences sequences{io::find_input_sequence(noisy, frame_range), io::find_input_sequence(denoised, frame_range),
+                           final_sequence, std::nullopt};
+    if (reference_render)
+        sequences.reference = io::find_input_sequence(reference, frame_range);
+    const RunMeasurements measured = measure_and_write_sheet(sequences, frames, info->highlight_frames, display,
+                                                             (directory / "contact_sheet.png").string());
+    summary["contact_sheet"] = {{"frames", measured.shown_frames},
+                                {"columns", reference_render
                                                 ? Json::array({"noisy", "denoised", "refined", "reference"})
                                                 : Json::array({"noisy", "denoised", "refined"})},
                                 {"ocio_config", color_config.path()},
@@ -296,12 +222,13 @@ int run_run(const RunOptions& options)
 
     if (reference_render)
         summary["quality"] =
-            quality_summary(info->highlight_frames, frames, errors, seconds,
+            quality_summary(info->highlight_frames, frames, measured.errors, seconds,
                             {options.spp, noisy_render.render_seconds},
                             {options.reference_spp, reference_render->render_seconds});
     if (denoise_result.report_page) {
+        const io::SequenceReader final_indirect(final_sequence, {"DiffInd"});
         complete_report(*denoise_result.report_page, options.scene, final_indirect,
-                        io::find_input_sequence(masks, frame_range), errors, seconds);
+                        io::find_input_sequence(masks, frame_range), measured.errors, seconds);
         app::report::write_report(report_path, *denoise_result.report_page);
     }
     summary["seconds"]["wall"] = seconds_since(start);

@@ -1,4 +1,4 @@
-// The measurements of `modestack run --reference-spp` (DESIGN.md, "How we measure
+// The measurements of `modestack run --reference-spp` (docs/design.md, "How we measure
 // quality"): from the per-frame relMSE of the noisy, denoised and refined results
 // against the reference, and the two renders' times, the JSON block with relMSE,
 // equivalent spp and the equal-quality speed-up of each, for the indirect layer and

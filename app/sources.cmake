@@ -13,6 +13,7 @@ target_sources(modestack_app PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/cmd_run.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_composite.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_quality.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/run_sheet.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_report.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_compare.cpp
   ${CMAKE_CURRENT_LIST_DIR}/compare_job.cpp
