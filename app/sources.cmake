@@ -4,6 +4,7 @@ target_sources(modestack_app PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/cmd_info.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_denoise.cpp
   ${CMAKE_CURRENT_LIST_DIR}/denoise_job.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/denoise_summary.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_render.cpp
   ${CMAKE_CURRENT_LIST_DIR}/render_job.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene_frames.cpp
