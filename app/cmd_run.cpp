@@ -2,24 +2,26 @@
 // Renders the noisy pass of a built-in scene, denoises its indirect layer (auto
 // rank), refines the unsure pixels at high spp, composites the final beauty
 // = DiffCol × (DiffDir + DiffInd) + Emit ([0017]) and writes a summary and a
-// contact sheet. Each stage is the very subcommand a user would type (run in
-// this process, not spawned), so `run` and the stages by hand give the same
-// files. With --reference-spp it also renders a reference and measures relMSE,
-// equivalent spp and the equal-quality speed-up as docs/design.md, "How quality is
-// measured", defines them.
+// contact sheet. Each stage is the library call behind the subcommand a user
+// would type (render_job.h, denoise_job.h, refine_job.h), given the options
+// the user would type, so `run` and the stages by hand give the same files; run
+// reads what it reports from the results they return. With --reference-spp it
+// also renders a reference and measures relMSE, equivalent spp and the
+// equal-quality speed-up (docs/design.md, "How we measure quality").
 // The contact sheet goes through the OCIO config's display/view.
 #include "app/command.h"
-#include "app/report/denoise_report.h"
+#include "app/denoise_job.h"
+#include "app/refine_job.h"
+#include "app/render_job.h"
 #include "app/report/html_report.h"
 #include "app/run_composite.h"
 #include "app/run_context.h"
 #include "app/run_quality.h"
 #include "app/run_report.h"
+#include "app/run_sheet.h"
 #include "core/common/error.h"
-#include "core/refine/equal_quality.h"
 #include "core/scene/builtin_scenes.h"
 #include "io/color_management.h"
-#include "io/contact_sheet.h"
 #include "io/frame_output.h"
 #include "io/sequence.h"
 #include "io/sequence_reader.h"
@@ -28,10 +30,9 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
-#include <algorithm>
+#include <cmath>
 #include <chrono>
 #include <filesystem>
-#include <fstream>
 #include <optional>
 
 namespace modestack::app {
@@ -57,36 +58,8 @@ struct RunOptions {
     CommonOptions common;
 };
 
-// Runs one stage as its subcommand, with the common options passed on.
-void run_stage(std::vector<std::string> arguments, const CommonOptions& common)
-{
-    if (common.threads > 0)
-        arguments.insert(arguments.end(), {"--threads", std::to_string(common.threads)});
-    if (common.quiet)
-        arguments.push_back("--quiet");
-    CLI::App cli{"modestack", "modestack"};
-    cli.require_subcommand(1);
-    std::vector<Subcommand> stages{add_render_command(cli), add_denoise_command(cli),
-                                   add_refine_command(cli)};
-    std::vector<std::string> reversed(arguments.rbegin(), arguments.rend());
-    try {
-        cli.parse(reversed);
-    } catch (const CLI::ParseError& error) {
-        throw internal_error(
-            fmt::format("run built a bad '{}' command: {}", arguments.front(), error.what()));
-    }
-    for (auto& stage : stages)
-        if (stage.cli->parsed() && stage.run() != 0)
-            throw bad_input(arguments.front(), "stage failed");
-}
-
-Json read_json(const std::string& path)
-{
-    std::ifstream stream(path);
-    if (!stream)
-        throw bad_input(path, "cannot read a stage's JSON summary");
-    return Json::parse(stream);
-}
+// Writes a stage's --json summary into run's json/ directory.
+void write_json(const std::string& path, const Json& json) { io::write_text_file(path, json.dump(2) + "\n"); }
 
 double seconds_since(std::chrono::steady_clock::time_point start)
 {
@@ -98,23 +71,18 @@ std::string sequence_path(const RunOptions& options, const std::string& kind)
     return (stdfs::path(options.directory) / kind / (options.scene + ".####.exr")).string();
 }
 
-// Frames shown on the contact sheet: four spread over the shot; for `switch` one
-// of them is the middle of the crossing, where the denoiser fails.
-std::vector<int> sheet_frame_indices(const std::vector<int>& frames, const std::string& scene)
+// The render stage's options: the shot as run renders it.
+RenderCommandOptions render_options(const RunOptions& options, const std::string& output, int spp, int seed,
+                                    const std::string& frame_range)
 {
-    std::vector<int> indices;
-    int count = static_cast<int>(frames.size());
-    for (int k = 0; k < std::min(4, count); ++k)
-        indices.push_back(count == 1 ? 0 : k * (count - 1) / std::max(1, std::min(4, count) - 1));
-    if (scene == "switch") {
-        int middle = (scene::kSwitchCrossingFirstFrame + scene::kSwitchCrossingLastFrame) / 2;
-        auto found = std::find(frames.begin(), frames.end(), middle);
-        if (found != frames.end() && indices.size() > 1)
-            indices[1] = static_cast<int>(found - frames.begin());
-    }
-    std::sort(indices.begin(), indices.end());
-    indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
-    return indices;
+    RenderCommandOptions render;
+    render.scene = options.scene;
+    render.size = options.size;
+    render.frames = frame_range;
+    render.output = output;
+    render.render.spp = spp;
+    render.render.seed = static_cast<std::uint64_t>(seed);
+    return render;
 }
 
 int run_run(const RunOptions& options)
@@ -128,8 +96,8 @@ int run_run(const RunOptions& options)
         scene::make_builtin_scene(options.scene, 1); // throws the error listing the scenes
     std::vector<int> frames = io::parse_frame_range(
         options.frames.empty() ? fmt::format("{}-{}", info->first_frame, info->last_frame) : options.frames);
-    if (frames.size() < 3)
-        throw usage_error("--frames: run denoises a shot, give at least 3 frames");
+    if (frames.size() < kMinimumShotFrames)
+        throw usage_error("--frames: " + too_few_frames(frames.size()));
     const std::string frame_range = io::describe_frames(frames);
     // Checked before any work: a bad config, display or view fails at once.
     const io::ColorConfig color_config(io::locate_color_config(options.ocio_config));
@@ -146,54 +114,48 @@ int run_run(const RunOptions& options)
                       final_path = sequence_path(options, "final"), masks = sequence_path(options, "masks"),
                       reference = sequence_path(options, "reference");
     auto json_file = [&](const char* name) { return (json_directory / name).string(); };
-    std::vector<std::string> scene_options{"--scene",    options.scene, "--size",
-                                           options.size, "--frames",    frame_range};
 
     Json seconds;
     auto stage_start = std::chrono::steady_clock::now();
-    std::vector<std::string> render_arguments{"render",
-                                              "-o",
-                                              noisy,
-                                              "--spp",
-                                              std::to_string(options.spp),
-                                              "--seed",
-                                              "1",
-                                              "--json",
-                                              json_file("render.json")};
-    render_arguments.insert(render_arguments.end(), scene_options.begin(), scene_options.end());
-    run_stage(render_arguments, options.common);
+    const RenderResult noisy_render =
+        render(make_render_job(render_options(options, noisy, options.spp, 1, frame_range)), options.common);
+    write_json(json_file("render.json"), render_json(noisy_render));
     seconds["render"] = seconds_since(stage_start);
 
     stage_start = std::chrono::steady_clock::now();
     // The renderer writes scene-linear Rec.709, which the denoiser reads as such.
     const std::string report_path = (directory / "report.html").string();
-    run_stage({"denoise", noisy, "--frames", frame_range, "--layer", "DiffInd", "-o", denoised, "--json",
-               json_file("denoise.json"), "--ocio-config", color_config.path(), "--report", report_path},
-              options.common);
-    // The stage wrote its page already; run completes it below (with refine and the reference).
-    std::optional<app::report::ReportData> report_data = app::report::take_published_report();
+    DenoiseCommandOptions denoise_options;
+    denoise_options.input = noisy;
+    denoise_options.frames = frame_range;
+    denoise_options.layers = {"DiffInd"};
+    denoise_options.output = denoised;
+    denoise_options.ocio_config = color_config.path();
+    denoise_options.report_path = report_path;
+    // The stage writes its page already; run completes it below (with refine and the reference).
+    DenoiseResult denoise_result = denoise(make_denoise_job(denoise_options, nullptr), options.common);
+    write_json(json_file("denoise.json"), denoise_json(denoise_result));
+    if (!options.common.quiet)
+        print_denoise_summary(denoise_result);
     seconds["denoise"] = seconds_since(stage_start);
 
     stage_start = std::chrono::steady_clock::now();
-    std::vector<std::string> refine_arguments{"refine",
-                                              "--denoised",
-                                              denoised,
-                                              "-o",
-                                              refined,
-                                              "--masks",
-                                              masks,
-                                              "--spp",
-                                              std::to_string(options.refine_spp),
-                                              "--json",
-                                              json_file("refine.json")};
+    RefineCommandOptions refine_options;
+    refine_options.scene = options.scene;
+    refine_options.size = options.size;
+    refine_options.frames = frame_range;
+    refine_options.denoised = denoised;
+    refine_options.output = refined;
+    refine_options.masks = masks;
+    refine_options.settings.render.spp = options.refine_spp;
     if (options.threshold > 0)
-        refine_arguments.insert(refine_arguments.end(),
-                                {"--threshold", fmt::format("{}", options.threshold)});
+        refine_options.threshold = options.threshold;
     else
-        refine_arguments.insert(refine_arguments.end(),
-                                {"--budget", fmt::format("{}", options.budget_percent)});
-    refine_arguments.insert(refine_arguments.end(), scene_options.begin(), scene_options.end());
-    run_stage(refine_arguments, options.common);
+        refine_options.budget_percent = options.budget_percent;
+    const RefineResult refine_result = refine(make_refine_job(refine_options), options.common);
+    write_json(json_file("refine.json"), refine_json(refine_result));
+    if (!options.common.quiet)
+        print_refine_summary(refine_result);
     seconds["refine"] = seconds_since(stage_start);
 
     RunContext context(options.common);
@@ -207,25 +169,17 @@ int run_run(const RunOptions& options)
                          seconds["refine"].get<double>() + seconds["composite"].get<double>();
     seconds["total"] = our_seconds;
 
+    std::optional<RenderResult> reference_render;
     if (options.reference_spp > 0) {
         stage_start = std::chrono::steady_clock::now();
-        std::vector<std::string> reference_arguments{"render",
-                                                     "-o",
-                                                     reference,
-                                                     "--spp",
-                                                     std::to_string(options.reference_spp),
-                                                     "--seed",
-                                                     "3",
-                                                     "--json",
-                                                     json_file("reference.json")};
-        reference_arguments.insert(reference_arguments.end(), scene_options.begin(), scene_options.end());
-        run_stage(reference_arguments, options.common);
+        reference_render = render(
+            make_render_job(render_options(options, reference, options.reference_spp, 3, frame_range)),
+            options.common);
+        write_json(json_file("reference.json"), render_json(*reference_render));
         seconds["reference"] = seconds_since(stage_start);
     }
 
-    Json denoise_json = read_json(json_file("denoise.json")),
-         refine_json = read_json(json_file("refine.json"));
-    Json render_json = read_json(json_file("render.json"));
+    const int rank = denoise_result.report.rank.rank;
     Json summary;
     summary["version"] = version_string();
     summary["command"] = command_line();
@@ -234,13 +188,14 @@ int run_run(const RunOptions& options)
     summary["size"] = options.size;
     summary["spp"] = options.spp;
     summary["refine_spp"] = options.refine_spp;
-    summary["rank"] = denoise_json["rank"]["n"];
-    summary["rank_rule"] = denoise_json["rank"]["rule"];
-    summary["refine_selection"] = refine_json["selection"];
-    summary["refine_budget_percent"] = refine_json["budget_percent"];
-    summary["refine_threshold"] = refine_json["threshold"];
-    summary["pixels_refined"] = refine_json["pixels_rendered"];
-    summary["percent_pixels_refined"] = refine_json["percent_rendered"];
+    summary["rank"] = rank;
+    summary["rank_rule"] = denoise_result.report.rank.rule;
+    const bool by_budget = refine_result.budget_percent >= 0;
+    summary["refine_selection"] = by_budget ? "budget" : "threshold";
+    summary["refine_budget_percent"] = by_budget ? Json(refine_result.budget_percent) : Json();
+    summary["refine_threshold"] = std::isfinite(refine_result.threshold) ? Json(refine_result.threshold) : Json();
+    summary["pixels_refined"] = refine_result.pixels_rendered;
+    summary["percent_pixels_refined"] = refine_result.percent_rendered;
     summary["seconds"] = seconds;
     summary["outputs"] = {
         {"noisy", noisy},     {"denoised", denoised},
@@ -249,67 +204,14 @@ int run_run(const RunOptions& options)
         {"report", report_path}};
 
     // Measurements against the reference, and the contact sheet.
-    io::FrameSequence noisy_sequence = io::find_input_sequence(noisy, frame_range);
-    io::FrameSequence denoised_sequence = io::find_input_sequence(denoised, frame_range);
-    io::SequenceReader noisy_passes(noisy_sequence, kPassLayers), noisy_beauty(noisy_sequence, {"Combined"});
-    io::SequenceReader denoised_indirect(denoised_sequence, {"DiffInd"});
-    io::SequenceReader final_beauty(final_sequence, {"Combined"}),
-        final_indirect(final_sequence, {"DiffInd"});
-    std::unique_ptr<io::SequenceReader> reference_beauty, reference_indirect;
-    if (options.reference_spp > 0) {
-        io::FrameSequence reference_sequence = io::find_input_sequence(reference, frame_range);
-        reference_beauty =
-            std::make_unique<io::SequenceReader>(reference_sequence, std::vector<std::string>{"Combined"});
-        reference_indirect =
-            std::make_unique<io::SequenceReader>(reference_sequence, std::vector<std::string>{"DiffInd"});
-    }
-    // [layer 0 = DiffInd, 1 = beauty][version][frame]
-    std::vector<std::vector<std::vector<double>>> errors(2, std::vector<std::vector<double>>(3));
-    std::vector<int> sheet = sheet_frame_indices(frames, options.scene);
-    std::vector<std::vector<float>> sheet_images;
-    for (int i = 0; i < static_cast<int>(frames.size()); ++i) {
-        bool on_sheet = std::find(sheet.begin(), sheet.end(), i) != sheet.end();
-        if (!on_sheet && !reference_beauty)
-            continue;
-        std::vector<float> passes = read_frame(noisy_passes, i);
-        std::vector<float> indirect[3] = {std::vector<float>(passes.size() / 4),
-                                          read_frame(denoised_indirect, i), read_frame(final_indirect, i)};
-        for (std::size_t p = 0; p < indirect[0].size() / 3; ++p)
-            for (int c = 0; c < 3; ++c)
-                indirect[0][p * 3 + c] = passes[p * 12 + 6 + c];
-        std::vector<float> beauty[3] = {read_frame(noisy_beauty, i), composite(passes, indirect[1].data()),
-                                        read_frame(final_beauty, i)};
-        std::vector<float> reference_rgb;
-        if (reference_beauty) {
-            reference_rgb = read_frame(*reference_beauty, i);
-            std::vector<float> reference_indirect_rgb = read_frame(*reference_indirect, i);
-            for (int v = 0; v < 3; ++v) {
-                errors[0][v].push_back(refine::relative_mse(indirect[v].data(), reference_indirect_rgb.data(),
-                                                            indirect[v].size()));
-                errors[1][v].push_back(
-                    refine::relative_mse(beauty[v].data(), reference_rgb.data(), beauty[v].size()));
-            }
-        }
-        if (on_sheet) {
-            for (int v = 0; v < 3; ++v)
-                sheet_images.push_back(beauty[v]);
-            if (reference_beauty)
-                sheet_images.push_back(reference_rgb);
-        }
-    }
-    int columns = reference_beauty ? 4 : 3;
-    std::vector<io::ContactSheetCell> cells;
-    for (const auto& image : sheet_images)
-        cells.push_back({noisy_passes.width(), noisy_passes.height(), image.data()});
-    io::write_contact_sheet((directory / "contact_sheet.png").string(), columns, cells, display);
-    summary["contact_sheet"] = {{"frames",
-                                 [&] {
-                                     std::vector<int> shown;
-                                     for (int i : sheet)
-                                         shown.push_back(frames[i]);
-                                     return shown;
-                                 }()},
-                                {"columns", reference_beauty
+    RunSequences sequences{io::find_input_sequence(noisy, frame_range), io::find_input_sequence(denoised, frame_range),
+                           final_sequence, std::nullopt};
+    if (reference_render)
+        sequences.reference = io::find_input_sequence(reference, frame_range);
+    const RunMeasurements measured = measure_and_write_sheet(sequences, frames, info->highlight_frames, display,
+                                                             (directory / "contact_sheet.png").string());
+    summary["contact_sheet"] = {{"frames", measured.shown_frames},
+                                {"columns", reference_render
                                                 ? Json::array({"noisy", "denoised", "refined", "reference"})
                                                 : Json::array({"noisy", "denoised", "refined"})},
                                 {"ocio_config", color_config.path()},
@@ -318,16 +220,16 @@ int run_run(const RunOptions& options)
                                 {"view", display.view()},
                                 {"exposure", options.exposure}};
 
-    if (reference_beauty) {
-        Json reference_json = read_json(json_file("reference.json"));
-        summary["quality"] = quality_summary(options.scene, frames, errors, seconds,
-                                             {options.spp, render_json["render_seconds"].get<double>()},
-                                             {options.reference_spp, reference_json["render_seconds"].get<double>()});
-    }
-    if (report_data) {
-        complete_report(*report_data, options.scene, final_indirect, io::find_input_sequence(masks, frame_range), errors,
-                        seconds);
-        app::report::write_report(report_path, *report_data);
+    if (reference_render)
+        summary["quality"] =
+            quality_summary(info->highlight_frames, frames, measured.errors, seconds,
+                            {options.spp, noisy_render.render_seconds},
+                            {options.reference_spp, reference_render->render_seconds});
+    if (denoise_result.report_page) {
+        const io::SequenceReader final_indirect(final_sequence, {"DiffInd"});
+        complete_report(*denoise_result.report_page, options.scene, final_indirect,
+                        io::find_input_sequence(masks, frame_range), measured.errors, seconds);
+        app::report::write_report(report_path, *denoise_result.report_page);
     }
     summary["seconds"]["wall"] = seconds_since(start);
     io::write_text_file((directory / "summary.json").string(), summary.dump(2) + "\n");
@@ -335,8 +237,7 @@ int run_run(const RunOptions& options)
         std::fprintf(stderr,
                      "run: %s, %zu frames, N = %d modes, %.2f %% of pixels refined, %.1f s (render %.1f, "
                      "denoise %.1f, refine %.1f, composite %.1f)\n",
-                     options.scene.c_str(), frames.size(), summary["rank"].get<int>(),
-                     summary["percent_pixels_refined"].get<double>(), our_seconds,
+                     options.scene.c_str(), frames.size(), rank, refine_result.percent_rendered, our_seconds,
                      seconds["render"].get<double>(), seconds["denoise"].get<double>(),
                      seconds["refine"].get<double>(), seconds["composite"].get<double>());
         std::fprintf(stderr, "run: results in %s (summary.json, contact_sheet.png, final/, refined/, ...)\n",

@@ -6,10 +6,15 @@
 #include <CLI/CLI.hpp>
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 
 namespace modestack::app {
+
+/// A whole number of at least 1 (--spp, --max-depth); CLI::PositiveNumber would
+/// print "not in range 0 to" the largest double, in full.
+inline const CLI::Range kAtLeastOne(1, std::numeric_limits<int>::max(), "at least 1");
 
 /// A registered subcommand.
 struct Subcommand {

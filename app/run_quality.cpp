@@ -1,7 +1,6 @@
 #include "app/run_quality.h"
 
 #include "core/refine/equal_quality.h"
-#include "core/scene/builtin_scenes.h"
 
 #include <cmath>
 
@@ -9,7 +8,7 @@ namespace modestack::app {
 
 using Json = nlohmann::ordered_json;
 
-Json quality_summary(const std::string& scene_name, const std::vector<int>& frames,
+Json quality_summary(const scene::FrameSpan& highlight_frames, const std::vector<int>& frames,
                      const std::vector<std::vector<std::vector<double>>>& errors, const Json& seconds,
                      RenderTiming noisy, RenderTiming reference)
 {
@@ -34,12 +33,11 @@ Json quality_summary(const std::string& scene_name, const std::vector<int>& fram
             }
         return count ? sum / count : 0.0;
     };
-    std::vector<bool> all(frames.size(), true), crossing(frames.size(), false);
-    bool has_crossing = false;
+    std::vector<bool> all(frames.size(), true), highlighted(frames.size(), false);
+    bool has_highlight = false;
     for (size_t t = 0; t < frames.size(); ++t)
-        if (scene_name == "switch" && frames[t] >= scene::kSwitchCrossingFirstFrame &&
-            frames[t] <= scene::kSwitchCrossingLastFrame)
-            crossing[t] = has_crossing = true;
+        if (highlight_frames.contains(frames[t]))
+            highlighted[t] = has_highlight = true;
     const char* kLayers[] = {"DiffInd", "beauty"};
     for (int layer = 0; layer < 2; ++layer) {
         Json entry;
@@ -49,8 +47,8 @@ Json quality_summary(const std::string& scene_name, const std::vector<int>& fram
         for (int v = 0; v < 3; ++v) {
             double error = mean_of(errors[layer][v], all);
             entry["relmse"][kVersions[v]] = error;
-            if (has_crossing)
-                entry["relmse_crossing_frames"][kVersions[v]] = mean_of(errors[layer][v], crossing);
+            if (has_highlight)
+                entry["relmse_crossing_frames"][kVersions[v]] = mean_of(errors[layer][v], highlighted);
             double equivalent = refine::equivalent_spp(error, c, reference.spp);
             bool finite = std::isfinite(equivalent);
             entry["equivalent_spp"][kVersions[v]] = finite ? Json(equivalent) : Json();

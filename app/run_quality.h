@@ -5,6 +5,8 @@
 // the beauty.
 #pragma once
 
+#include "core/scene/builtin_scenes.h"
+
 #include <nlohmann/json.hpp>
 
 #include <string>
@@ -20,8 +22,9 @@ struct RenderTiming {
 
 /// `errors[layer][version][frame]`: layer 0 DiffInd, 1 beauty; version 0 noisy,
 /// 1 denoised, 2 refined. `seconds` holds run's stage times ("render", "denoise",
-/// "total"). For `switch` the crossing frames are also reported on their own.
-nlohmann::ordered_json quality_summary(const std::string& scene_name, const std::vector<int>& frames,
+/// "total"). The scene's highlight frames (switch: the crossing), when it has
+/// any, are also reported on their own.
+nlohmann::ordered_json quality_summary(const scene::FrameSpan& highlight_frames, const std::vector<int>& frames,
                                        const std::vector<std::vector<std::vector<double>>>& errors,
                                        const nlohmann::ordered_json& seconds, RenderTiming noisy,
                                        RenderTiming reference);

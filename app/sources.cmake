@@ -1,17 +1,23 @@
-target_sources(modestack PRIVATE
-  ${CMAKE_CURRENT_LIST_DIR}/main.cpp
+target_sources(modestack_app PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/command_line.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_context.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_info.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_denoise.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/denoise_job.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/denoise_summary.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_render.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/render_job.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/scene_frames.cpp
   ${CMAKE_CURRENT_LIST_DIR}/scene_source.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_refine.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/refine_job.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_run.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_composite.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_quality.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/run_sheet.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_report.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_compare.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/compare_job.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sequence_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/color_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/memory_budget.cpp

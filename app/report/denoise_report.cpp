@@ -7,15 +7,8 @@
 #include <fmt/format.h>
 
 #include <filesystem>
-#include <mutex>
 
 namespace modestack::app::report {
-namespace {
-
-std::mutex g_published_lock;
-std::optional<ReportData> g_published;
-
-}  // namespace
 
 CollectorOptions collector_options(int frames)
 {
@@ -72,20 +65,6 @@ void check_report_path(const std::string& path, const std::vector<std::string>& 
     if (std::filesystem::is_directory(path, error))
         throw bad_input(path, "--report names a directory: give a file name such as report.html");
     io::check_outputs({path}, inputs);
-}
-
-void publish_report(ReportData data)
-{
-    std::lock_guard<std::mutex> lock(g_published_lock);
-    g_published = std::move(data);
-}
-
-std::optional<ReportData> take_published_report()
-{
-    std::lock_guard<std::mutex> lock(g_published_lock);
-    std::optional<ReportData> data = std::move(g_published);
-    g_published.reset();
-    return data;
 }
 
 }  // namespace modestack::app::report

@@ -1,15 +1,14 @@
 // Glue between `modestack denoise` and the report: the collector's options for
 // a shot, the ReportData of a finished run (one engine run, or one per
-// --segments part), the early check of the --report path, and the hand-over of
-// that data to `modestack run`, which runs denoise in its own process and then
-// adds the refined frames, refine masks and true error to the same page.
+// --segments part) and the early check of the --report path. The data comes
+// back to the caller in DenoiseResult (app/denoise_job.h), so that `modestack
+// run` adds the refined frames, refine masks and true error to the same page.
 #pragma once
 
 #include "app/report/report_collector.h"
 #include "app/report/report_data.h"
 #include "core/denoise/engine.h"
 
-#include <optional>
 #include <string>
 #include <vector>
 
@@ -38,10 +37,5 @@ ReportData gather_report(const Collector& collector, const std::vector<EngineRun
 /// Checks before any work that `path` can be written and is not one of `inputs`:
 /// Error (bad input or usage) naming it otherwise.
 void check_report_path(const std::string& path, const std::vector<std::string>& inputs);
-
-/// Keeps `data` for publish's caller in this process (`modestack run`).
-void publish_report(ReportData data);
-/// The data the last denoise published (once), if any.
-std::optional<ReportData> take_published_report();
 
 }  // namespace modestack::app::report

@@ -161,18 +161,18 @@ std::string scene_names()
 const std::vector<SceneInfo>& builtin_scenes()
 {
     static const std::vector<SceneInfo> scenes = {
-        {"static", "nothing moves: two boxes under a ceiling light", kFirstFrame, kLastFrame},
-        {"orbit", "the ceiling light circles the room once during the shot", kFirstFrame, kLastFrame},
+        {"static", "nothing moves: two boxes under a ceiling light", kFirstFrame, kLastFrame, {}},
+        {"orbit", "the ceiling light circles the room once during the shot", kFirstFrame, kLastFrame, {}},
         {"switch",
          "the light jumps to another place at frame 25; a small blue box crosses the floor in frames 30-36 "
          "only",
-         kFirstFrame, kLastFrame},
+         kFirstFrame, kLastFrame, {kSwitchCrossingFirstFrame, kSwitchCrossingLastFrame}},
         {"spin", "a flat box turns half a turn under a fixed light; its shadow sweeps the floor", kFirstFrame,
-         kLastFrame},
+         kLastFrame, {}},
         {"flythrough",
          "the camera moves through the room while the light changes colour and strength and the short box "
          "turns (object-space denoising)",
-         kFirstFrame, kLastFrame},
+         kFirstFrame, kLastFrame, {}},
     };
     return scenes;
 }

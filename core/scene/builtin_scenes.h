@@ -13,12 +13,24 @@
 
 namespace modestack::scene {
 
+/// Frames first to last (inclusive) of a shot; empty when first > last.
+struct FrameSpan {
+    int first = 0;
+    int last = -1;
+    bool empty() const { return first > last; }
+    bool contains(int frame) const { return frame >= first && frame <= last; }
+};
+
 /// One line of `modestack render --scene list`.
 struct SceneInfo {
     std::string name;        ///< what --scene takes
     std::string description; ///< one line: what moves, and when
     int first_frame;         ///< first frame of the shot (inclusive)
     int last_frame;          ///< last frame of the shot (inclusive)
+    /// A brief event worth a closer look (switch: the box crossing the floor, where
+    /// the denoiser fails); `modestack run` shows its middle frame on the contact
+    /// sheet and measures these frames on their own. Empty for most scenes.
+    FrameSpan highlight_frames;
 };
 
 /// The built-in scenes, in the order they are listed: static, orbit, switch, spin, flythrough.

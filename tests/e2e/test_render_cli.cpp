@@ -78,7 +78,7 @@ TEST_CASE("render: --scene list, and bad options give one line and exit 1 or 2")
         {"--scene nowhere -o " + dir.file("r.####.exr"), 2, "nowhere"},
         {"--scene orbit --spp 0 -o " + dir.file("r.####.exr"), 2, "--spp"},
         {"--scene orbit --size 0x0 -o " + dir.file("r.####.exr"), 2, "--size '0x0'"},
-        {"--scene orbit --frames 40-50 -o " + dir.file("r.####.exr"), 2, "has frames 1-48, not 49"},
+        {"--scene orbit --frames 40-50 -o " + dir.file("r.####.exr"), 2, "frame 49 is outside scene 'orbit' (frames 1-48)"},
         {"--scene orbit", 2, "-o SEQ"},
         {"--scene orbit --frames 1 --size 8x8 -o /proc/version/r.####.exr", 1, "output directory"},
         {"--scene orbit --frames 1 --size 8x8 --mask " + dir.file("none.####.exr") + " -o " + dir.file("r.####.exr"),
