@@ -266,8 +266,9 @@ check skip-existing skip_existing_case
 check colorspace-srgb ms "${dj[@]}" --colorspace sRGB
 check ocio-config ms "${dj[@]}" --ocio-config "$OCIO"
 check layers-two ms "${dj[@]}" --layer Combined
-check exr-writer-openimageio env MODESTACK_EXR_WRITER=openimageio "$work/bin/modestack" "${dj[@]}"
-check exr-reader-openimageio env MODESTACK_EXR_READER=openimageio "$work/bin/modestack" "${dj[@]}"
+# The codec is an option since issue 28 (it was MODESTACK_EXR_READER/WRITER=openimageio
+# before): against an older binary these two cases fail on OLD's side.
+check exr-codec-openimageio ms "${dj[@]}" --exr-codec openimageio
 
 check object-space-fly ms denoise "$inputs/fly/n.####.exr" --layer DiffInd --object-space "$inputs/fly/p.####.exr" \
     -q -o d/d.####.exr --json d.json

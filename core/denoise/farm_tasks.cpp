@@ -22,20 +22,23 @@ double seconds_since(Clock::time_point start)
     return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-// What no farm task can do (each needs the whole shot in one process).
+// What no farm task can do (each needs the whole shot in one process). The
+// command refuses these first (app/denoise_stages.cpp, denoise_job.cpp), so
+// here they are internal errors.
 void check_task(const Settings& settings, Stage stage)
 {
     const std::string name = stage_name(stage);
     if (settings.solver == Solver::RandomizedSvd)
-        throw usage_error(
+        throw internal_error(
             fmt::format("--stage {}: the farm stages use the gram solver, not --method rsvd", name));
     if (!settings.training_frames.empty())
-        throw usage_error(fmt::format("--stage {} cannot be combined with --train-frames", name));
+        throw internal_error(fmt::format("--stage {} cannot be combined with --train-frames", name));
     if (stage != Stage::Statistics && stage != Stage::Solve &&
         settings.non_negative == NonNegativeMode::KeepSum)
-        throw usage_error(fmt::format("--stage {} cannot be combined with --non-negative-mode keep-sum: it "
-                                      "needs every frame of a pixel; use clamp or run on one machine",
-                                      name));
+        throw internal_error(
+            fmt::format("--stage {} cannot be combined with --non-negative-mode keep-sum: it "
+                        "needs every frame of a pixel; use clamp or run on one machine",
+                        name));
 }
 
 // The checks, the plan and the first report fields of a task of `stage` over

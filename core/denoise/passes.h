@@ -33,8 +33,10 @@ struct RunPlan {
     std::optional<FeatureGuide> features; ///< the mode filter's feature guide (none: unguided)
 };
 
-/// Throws a usage error for settings that do not fit the shot (too few frames,
-/// N out of range, options that need each other).
+/// Checks the settings against the shot: a usage error for what the data
+/// decides (too few frames, no pixels, training frames outside the shot), an
+/// internal error for what the command's validation step must have refused
+/// (N out of range, options that need each other).
 void check_settings(const Settings& settings, const ShotShape& shape);
 
 /// Plans the bands and picks the solver for checked settings; `with_features`:

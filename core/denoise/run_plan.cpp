@@ -22,23 +22,27 @@ constexpr int kGuideImages = 4;
 
 void check_settings(const Settings& settings, const ShotShape& shape)
 {
+    // What the data decides: usage errors, whoever calls.
     if (shape.frames < 3)
         throw usage_error(fmt::format("denoising needs at least 3 frames, got {}", shape.frames));
     if (shape.width <= 0 || shape.height <= 0 || shape.channels <= 0)
         throw usage_error("the shot has no pixels");
-    if (settings.rank.rule == lowrank::RankRule::Fixed &&
-        (settings.rank.fixed_rank < 1 || settings.rank.fixed_rank >= shape.frames))
-        throw usage_error(fmt::format("--rank {} is out of range: use 1 to {} for {} frames",
-                                      settings.rank.fixed_rank, shape.frames - 1, shape.frames));
-    if (settings.sigma_radius < 0)
-        throw usage_error("--sigma-radius must be 0 or more");
-    if (settings.rank_map.enabled && !settings.mode_filter.enabled)
-        throw usage_error("--rank-map needs the mode filter: the local estimates use its noise and filters");
-    if (settings.optimal_shrinkage && settings.mode_filter.enabled)
-        throw usage_error(
-            "--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
     if (!settings.training_frames.empty())
         check_training_frames(settings, shape.frames);
+    // What the command's validation step already refused (app/denoise_job.cpp,
+    // method_options.cpp): reaching here is a bug, so an internal error.
+    if (settings.rank.rule == lowrank::RankRule::Fixed &&
+        (settings.rank.fixed_rank < 1 || settings.rank.fixed_rank >= shape.frames))
+        throw internal_error(fmt::format("--rank {} is out of range: use 1 to {} for {} frames",
+                                         settings.rank.fixed_rank, shape.frames - 1, shape.frames));
+    if (settings.sigma_radius < 0)
+        throw internal_error("--sigma-radius must be 0 or more");
+    if (settings.rank_map.enabled && !settings.mode_filter.enabled)
+        throw internal_error(
+            "--rank-map needs the mode filter: the local estimates use its noise and filters");
+    if (settings.optimal_shrinkage && settings.mode_filter.enabled)
+        throw internal_error(
+            "--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
     if (settings.whitening &&
         settings.whitening->size() != static_cast<size_t>(shape.width) * shape.height * shape.channels)
         throw internal_error("the whitening weights do not match the shot");
