@@ -71,14 +71,7 @@ Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& setting
                                survey_rows(context, stream, plan, solution, 0, shape.height, false));
         report.seconds_filter_survey = seconds_since(survey_start);
     }
-    report.rank = survey.rank;
-    report.mode_filter = survey.plan;
-    describe_solution(settings, shape, solution, survey.rank.rank, report);
-    const RebuildBasis modes =
-        make_rebuild_basis(settings, solution.basis, survey.rank.rank, survey.modes,
-                           solution.training ? &*solution.training : nullptr, survey.rank.noise_sigma);
-    report.shrinkage = modes.shrinkage;
-    report.weight_smoothing = modes.weight_smoothing;
+    const RebuildBasis modes = chosen_modes(settings, shape, solution, survey, report);
     report.seconds_solve = seconds_since(start) - report.seconds_filter_survey + solution.seconds;
 
     // Modes and write: pass 2.

@@ -84,13 +84,7 @@ Solved solved_from(const PassContext& context, const RunPlan& plan, const Solved
     } else {
         result.survey = unfiltered_survey(result.solution);
     }
-    report.rank = result.survey.rank;
-    report.mode_filter = result.survey.plan;
-    describe_solution(context.settings, shape, result.solution, report.rank.rank, report);
-    result.modes = make_rebuild_basis(context.settings, result.solution.basis, report.rank.rank,
-                                      result.survey.modes, nullptr, report.rank.noise_sigma);
-    report.shrinkage = result.modes.shrinkage;
-    report.weight_smoothing = result.modes.weight_smoothing;
+    result.modes = chosen_modes(context.settings, shape, result.solution, result.survey, report);
     return result;
 }
 

@@ -86,6 +86,12 @@ Survey finish_survey(const Settings& settings, const ShotShape& shape, const Run
 /// Without the mode filter: N as the solution chose it.
 Survey unfiltered_survey(const Solution& solution);
 
+/// Pass 2's temporal matrices for the survey's N, and what the report says of
+/// the chosen modes: N and why, the filters, the spectrum, shrinkage and
+/// weight smoothing. A whole run and the farm's modes and write tasks alike.
+RebuildBasis chosen_modes(const Settings& settings, const ShotShape& shape, const Solution& solution,
+                          const Survey& survey, Report& report);
+
 /// What pass 2 reports besides the outputs.
 struct RebuildReport {
     NonNegativeCounts non_negative;

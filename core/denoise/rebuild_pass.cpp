@@ -2,6 +2,8 @@
 // rebuilt from the modes (filtered, shrunk, made non-negative as the settings
 // say), its sigma, and the rows handed to the sink; the spatial modes and the
 // rank map when the sink or the settings ask for them.
+// chosen_modes, which every rebuild starts from (a farm's modes and write
+// tasks too), lives here beside it.
 #include "core/denoise/passes.h"
 
 #include "core/lowrank/projection.h"
@@ -29,6 +31,20 @@ void write_spatial_modes(FrameSink& sink, const ShotShape& shape, const ScratchB
 }
 
 } // namespace
+
+RebuildBasis chosen_modes(const Settings& settings, const ShotShape& shape, const Solution& solution,
+                          const Survey& survey, Report& report)
+{
+    report.rank = survey.rank;
+    report.mode_filter = survey.plan;
+    describe_solution(settings, shape, solution, survey.rank.rank, report);
+    RebuildBasis modes = make_rebuild_basis(settings, solution.basis, survey.rank.rank, survey.modes,
+                                            solution.training ? &*solution.training : nullptr,
+                                            survey.rank.noise_sigma);
+    report.shrinkage = modes.shrinkage;
+    report.weight_smoothing = modes.weight_smoothing;
+    return modes;
+}
 
 RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const RunPlan& plan,
                            const Solution& solution, const Survey& survey, const RebuildBasis& modes)
