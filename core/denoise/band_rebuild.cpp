@@ -55,11 +55,12 @@ std::pair<int, int> BandRebuilder::sigma_rows(const Band& data, int row, int end
     return {std::max(data.row_begin, row - halo), std::min(data.row_end, end + halo)};
 }
 
-const float* BandRebuilder::band_features(const Band& data, std::vector<float>& features) const
+const float* band_features(const ModeFilterOptions& filter, const FeatureGuide* guide, const Band& data,
+                           std::vector<float>& features)
 {
-    if (m_filter_options.feature_channels == 0)
+    if (filter.feature_channels == 0)
         return nullptr;
-    m_features->read_rows(data.row_begin, data.row_end, features);
+    guide->read_rows(data.row_begin, data.row_end, features);
     return features.data();
 }
 
@@ -121,7 +122,7 @@ void BandRebuilder::filter(const Band& data, int row, int end, std::vector<float
     coefficient_noise_variance(noisy, surveyed, shape, m_settings.mode_filter.noise_radius, noise_variance);
     filter_coefficients(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin, m_plan,
                         modes, {filtered.data(), valid, modes, valid}, m_gains,
-                        band_features(data, features));
+                        band_features(m_filter_options, m_features, data, features));
     const std::int64_t valid_pixels = valid / m_shape.channels;
     if (ranks) {
         std::vector<float> weights;

@@ -41,6 +41,11 @@ struct RebuildBasis {
 RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& basis, int rank, int surveyed,
                                 const TrainingGram* training, double noise_sigma);
 
+/// The mode filter's feature rows over `data`'s rows (with its halo) in
+/// `features`, or null when no feature guides it (`filter.feature_channels` 0).
+const float* band_features(const ModeFilterOptions& filter, const FeatureGuide* guide, const Band& data,
+                           std::vector<float>& features);
+
 /// Pass 2 up to the frames for one band at a time; its buffers are reused from
 /// band to band (fresh pages would cost the kernel's zeroing every band).
 class BandRebuilder {
@@ -81,7 +86,6 @@ public:
 
 private:
     void filter(const Band& data, int row, int end, std::vector<float>* ranks);
-    const float* band_features(const Band& data, std::vector<float>& features) const;
 
     const Settings& m_settings;
     ShotShape m_shape;

@@ -45,13 +45,10 @@ std::vector<std::vector<double>> survey_rows(const PassContext& context, ShotStr
         lowrank::ImageBandShape band_shape{shape.width, data.row_end - data.row_begin, shape.channels};
         coefficient_noise_variance(noisy, coefficient_view.view(), band_shape,
                                    context.settings.mode_filter.noise_radius, noise_variance);
-        const float* guide = nullptr;
-        if (plan.filter.feature_channels > 0) {
-            plan.features->read_rows(data.row_begin, data.row_end, features);
-            guide = features.data();
-        }
-        survey.add_band(coefficient_view.view(), noise_variance, band_shape, data.row_begin,
-                        row - data.row_begin, end - data.row_begin, guide);
+        survey.add_band(
+            coefficient_view.view(), noise_variance, band_shape, data.row_begin, row - data.row_begin,
+            end - data.row_begin,
+            band_features(plan.filter, plan.features ? &*plan.features : nullptr, data, features));
         context.progress.advance(end - row);
     }
     context.progress.end();
