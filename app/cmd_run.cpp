@@ -179,7 +179,7 @@ int run_run(const RunOptions& options)
         seconds["reference"] = seconds_since(stage_start);
     }
 
-    const int rank = denoise_result.report.rank.rank;
+    const int kept_modes = denoise_result.report.rank_decision.kept_modes;
     Json summary;
     summary["version"] = version_string();
     summary["command"] = command_line();
@@ -188,8 +188,8 @@ int run_run(const RunOptions& options)
     summary["size"] = options.size;
     summary["spp"] = options.spp;
     summary["refine_spp"] = options.refine_spp;
-    summary["rank"] = rank;
-    summary["rank_rule"] = denoise_result.report.rank.rule;
+    summary["rank"] = kept_modes;
+    summary["rank_rule"] = denoise_result.report.rank_decision.rule;
     const bool by_budget = refine_result.budget_percent >= 0;
     summary["refine_selection"] = by_budget ? "budget" : "threshold";
     summary["refine_budget_percent"] = by_budget ? Json(refine_result.budget_percent) : Json();
@@ -237,8 +237,8 @@ int run_run(const RunOptions& options)
         std::fprintf(stderr,
                      "run: %s, %zu frames, N = %d modes, %.2f %% of pixels refined, %.1f s (render %.1f, "
                      "denoise %.1f, refine %.1f, composite %.1f)\n",
-                     options.scene.c_str(), frames.size(), rank, refine_result.percent_rendered, our_seconds,
-                     seconds["render"].get<double>(), seconds["denoise"].get<double>(),
+                     options.scene.c_str(), frames.size(), kept_modes, refine_result.percent_rendered,
+                     our_seconds, seconds["render"].get<double>(), seconds["denoise"].get<double>(),
                      seconds["refine"].get<double>(), seconds["composite"].get<double>());
         std::fprintf(stderr, "run: results in %s (summary.json, contact_sheet.png, final/, refined/, ...)\n",
                      options.directory.c_str());

@@ -60,22 +60,22 @@ denoise::Settings make_settings(const DenoiseCommandOptions& options)
     denoise::Settings settings;
     settings.solver = denoise::parse_solver(options.method);
     if (options.rank == "auto") {
-        settings.rank.rule = lowrank::parse_rank_rule(options.rank_rule);
-        if (settings.rank.rule == lowrank::RankRule::Fixed)
+        settings.rank_rule.rule = lowrank::parse_rank_rule(options.rank_rule);
+        if (settings.rank_rule.rule == lowrank::RankRule::Fixed)
             throw usage_error("--rank-rule fixed needs a number: use --rank N");
     } else {
         try {
             size_t used = 0;
-            settings.rank.fixed_rank = std::stoi(options.rank, &used);
+            settings.rank_rule.fixed_modes = std::stoi(options.rank, &used);
             if (used != options.rank.size())
                 throw std::invalid_argument("trailing characters");
         } catch (const std::exception&) {
             throw usage_error(fmt::format("--rank '{}': write auto or a number of modes", options.rank));
         }
-        settings.rank.rule = lowrank::RankRule::Fixed;
-        if (settings.rank.fixed_rank < 1)
-            throw usage_error(
-                fmt::format("--rank {}: the number of modes must be at least 1", settings.rank.fixed_rank));
+        settings.rank_rule.rule = lowrank::RankRule::Fixed;
+        if (settings.rank_rule.fixed_modes < 1)
+            throw usage_error(fmt::format("--rank {}: the number of modes must be at least 1",
+                                          settings.rank_rule.fixed_modes));
     }
     settings.outliers.fireflies = !options.no_firefly_clamp;
     settings.outliers.firefly_k = options.firefly_k;
@@ -277,10 +277,10 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
     io::FrameSequence output = writes_frames ? io::output_sequence(job.output, input.frames) : io::FrameSequence{};
     if (input.frames.size() < kMinimumShotFrames)
         throw bad_input(job.input, too_few_frames(input.frames.size()));
-    if (settings.rank.rule == lowrank::RankRule::Fixed &&
-        settings.rank.fixed_rank >= static_cast<int>(input.frames.size()))
+    if (settings.rank_rule.rule == lowrank::RankRule::Fixed &&
+        settings.rank_rule.fixed_modes >= static_cast<int>(input.frames.size()))
         throw bad_input(job.input, fmt::format("--rank {} needs more than {} frames (use 1 to {})",
-                                               settings.rank.fixed_rank, input.frames.size(),
+                                               settings.rank_rule.fixed_modes, input.frames.size(),
                                                input.frames.size() - 1));
     apply_training_frames(job.method_options, input.frames, settings);
     SegmentRun segments = plan_segments(job.method_options, input.frames, !job.save_modes.empty());

@@ -34,7 +34,7 @@ nlohmann::ordered_json mode_filter_json(const denoise::Report& report)
                          {"kept", choice.kept}});
     }
     return {{"enabled", true},
-            {"rank", plan.rank},
+            {"rank", plan.kept_modes},
             {"guide", "first spatial mode"},
             {"feature_guides", report.feature_guide.features},
             {"feature_scales", report.feature_guide.scales},
@@ -60,12 +60,12 @@ void add_time_and_memory_json(const denoise::Report& report, double seconds_tota
 // N and why, the spectrum, the temporal modes and the outlier counts of a run.
 void add_modes_json(const denoise::Report& report, nlohmann::ordered_json& json)
 {
-    json["rank"] = {{"n", report.rank.rank},
-                    {"rule", report.rank.rule},
-                    {"reasoning", report.rank.reasoning},
-                    {"score", report.rank.score},
-                    {"noise_floor", report.rank.noise_floor},
-                    {"noise_sigma", report.rank.noise_sigma}};
+    json["rank"] = {{"n", report.rank_decision.kept_modes},
+                    {"rule", report.rank_decision.rule},
+                    {"reasoning", report.rank_decision.reasoning},
+                    {"score", report.rank_decision.score},
+                    {"noise_floor", report.rank_decision.noise_floor},
+                    {"noise_sigma", report.rank_decision.noise_sigma}};
     json["singular_values"] = report.singular_values;
     json["explained_variance"] = report.explained;
     json["temporal_modes"] = report.temporal_modes;
@@ -151,12 +151,13 @@ void print_denoise_summary(const DenoiseResult& result)
 {
     const denoise::Report& report = result.report;
     if (result.object_space) {
-        std::fprintf(stderr,
-                     "denoised %d of %d frames in object space (%lld points) with N = %d modes (%s rule, %s "
-                     "solver), surface filter: %s, in %.2f s\n",
-                     result.frames_written, report.shape.frames, static_cast<long long>(result.object_space->points),
-                     report.rank.rank, report.rank.rule.c_str(), report.solver.c_str(),
-                     result.surface_filter ? result.object_space->filter.reasoning.c_str() : "off", result.seconds);
+        std::fprintf(
+            stderr,
+            "denoised %d of %d frames in object space (%lld points) with N = %d modes (%s rule, %s "
+            "solver), surface filter: %s, in %.2f s\n",
+            result.frames_written, report.shape.frames, static_cast<long long>(result.object_space->points),
+            report.rank_decision.kept_modes, report.rank_decision.rule.c_str(), report.solver.c_str(),
+            result.surface_filter ? result.object_space->filter.reasoning.c_str() : "off", result.seconds);
         return;
     }
     if (result.stage && !result.writes_frames) {
@@ -166,8 +167,8 @@ void print_denoise_summary(const DenoiseResult& result)
                          result.seconds);
     } else {
         std::fprintf(stderr, "denoised %d of %d frames with N = %d modes (%s rule, %s solver) in %.2f s\n",
-                     result.frames_written, report.shape.frames, report.rank.rank, report.rank.rule.c_str(),
-                     report.solver.c_str(), result.seconds);
+                     result.frames_written, report.shape.frames, report.rank_decision.kept_modes,
+                     report.rank_decision.rule.c_str(), report.solver.c_str(), result.seconds);
     }
     if (result.non_negative)
         std::fprintf(stderr, "--non-negative changed %lld values in %lld pixel channels\n",

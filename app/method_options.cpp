@@ -219,8 +219,8 @@ nlohmann::ordered_json method_json(const TransformStream& stream, const denoise:
             {{"frames", fmt::format("{}-{}", frame_numbers[static_cast<size_t>(segment.first)],
                                     frame_numbers[static_cast<size_t>(segment.first + segment.count - 1)])},
              {"frame_count", segment.count},
-             {"rank", part.rank.rank},
-             {"rule", part.rank.rule},
+             {"rank", part.rank_decision.kept_modes},
+             {"rule", part.rank_decision.rule},
              {"singular_values", part.singular_values},
              {"shrink_factors", part.shrinkage},
              {"weight_smoothing_widths", smoothing_widths(part)}});

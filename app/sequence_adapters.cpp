@@ -119,7 +119,7 @@ SequenceSink::SequenceSink(const io::SequenceReader& reader, std::vector<std::st
 void SequenceSink::begin(const denoise::RebuildStart& start)
 {
     std::vector<io::HeaderAttribute> attributes = m_attributes;
-    attributes.push_back(io::HeaderAttribute::of_integer("modestack:rank", start.rank));
+    attributes.push_back(io::HeaderAttribute::of_integer("modestack:rank", start.kept_modes));
     attributes.push_back(io::HeaderAttribute::of_text("modestack:rank_rule", start.rank_rule));
     attributes.push_back(io::HeaderAttribute::of_text("modestack:solver", start.solver));
     m_outputs.clear();

@@ -31,7 +31,7 @@ ReportData gather_report(const Collector& collector, const std::vector<EngineRun
         segment.first = run.first;
         segment.count = run.count;
         segment.singular_values = report.singular_values;
-        segment.rank = report.rank;
+        segment.rank_decision = report.rank_decision;
         segment.temporal_modes =
             report.preview_temporal_modes.empty() ? report.temporal_modes : report.preview_temporal_modes;
         segment.coefficient_images = collector.coefficient_images(run.first, segment.temporal_modes);

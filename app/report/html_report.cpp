@@ -64,9 +64,10 @@ std::string spectrum_plot(const ReportData& data)
         }
         spec.series.push_back(series);
         std::string part = data.segments.size() > 1 ? fmt::format(" (part {})", s + 1) : "";
-        spec.vertical.push_back({segment.rank.rank + 0.5, fmt::format("N = {}{}", segment.rank.rank, part), color(s)});
-        if (segment.rank.noise_floor > 0)
-            spec.horizontal.push_back({segment.rank.noise_floor, "noise floor" + part, "#666"});
+        spec.vertical.push_back({segment.rank_decision.kept_modes + 0.5,
+                                 fmt::format("N = {}{}", segment.rank_decision.kept_modes, part), color(s)});
+        if (segment.rank_decision.noise_floor > 0)
+            spec.horizontal.push_back({segment.rank_decision.noise_floor, "noise floor" + part, "#666"});
     }
     return svg_plot(spec);
 }
@@ -124,7 +125,8 @@ Json page_data(const ReportData& data)
     json["panelWidth"] = 360;
     json["segments"] = Json::array();
     for (const Segment& segment : data.segments) {
-        Json entry{{"first", segment.first}, {"count", segment.count}, {"rank", segment.rank.rank}};
+        Json entry{
+            {"first", segment.first}, {"count", segment.count}, {"rank", segment.rank_decision.kept_modes}};
         Json weights = Json::array();
         for (size_t j = 0; j < segment.coefficient_images.size() && j < segment.temporal_modes.size(); ++j) {
             Json row = Json::array();
@@ -198,8 +200,9 @@ std::string render_html(const ReportData& data)
                                ? fmt::format("Part {} (frames {}&ndash;{}): ", s + 1, data.frame_numbers.at(segment.first),
                                              data.frame_numbers.at(segment.first + segment.count - 1))
                                : "";
-        html += fmt::format("<p class=\"reasoning\">{}N = {} by the <b>{}</b> rule. {}</p>\n", part, segment.rank.rank,
-                            escape_html(segment.rank.rule), escape_html(segment.rank.reasoning));
+        html += fmt::format("<p class=\"reasoning\">{}N = {} by the <b>{}</b> rule. {}</p>\n", part,
+                            segment.rank_decision.kept_modes, escape_html(segment.rank_decision.rule),
+                            escape_html(segment.rank_decision.reasoning));
     }
     html += "<h2>Temporal weights</h2>\n<div id=\"temporal\">" + temporal_plot(data) + "</div>\n";
     if (!data.cuts.empty())

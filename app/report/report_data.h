@@ -38,7 +38,7 @@ struct Segment {
     int first = 0;  ///< first frame index
     int count = 0;
     std::vector<double> singular_values;
-    lowrank::RankDecision rank;
+    lowrank::RankDecision rank_decision;
     /// pt(t, j) over the part's frames for j < N_max: [j][t].
     std::vector<std::vector<double>> temporal_modes;
     /// Coefficient images c_j = Σ_t X_small(t) pt(t, j) at preview resolution, j < N_max:

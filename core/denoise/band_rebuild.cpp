@@ -7,34 +7,36 @@
 
 namespace modestack::denoise {
 
-RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& basis, int rank, int surveyed,
-                                const TrainingGram* training, double noise_sigma)
+RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& basis, int kept_modes,
+                                int surveyed, const TrainingGram* training, double noise_sigma)
 {
     RebuildBasis result;
-    result.rank = rank;
+    result.kept_modes = kept_modes;
     // --rank-map: pixels may use modes beyond N, up to those the filter surveyed.
-    result.rebuild_modes = settings.rank_map.enabled
-                               ? std::max(rank, std::min(rank + settings.rank_map.extra_modes, surveyed))
-                               : rank;
+    result.rebuild_modes =
+        settings.rank_map.enabled
+            ? std::max(kept_modes, std::min(kept_modes + settings.rank_map.extra_modes, surveyed))
+            : kept_modes;
     // With training frames the projection (A) and the rebuild (B) differ: training.h.
-    result.temporal = training ? training->weights(basis, rank)
+    result.temporal = training ? training->weights(basis, kept_modes)
                                : Eigen::MatrixXd(basis.temporal.leftCols(result.rebuild_modes));
     const bool smooth = settings.weight_smoothing.enabled; // --weight-smoothing: B smoothed, A kept
     if (smooth)
         result.temporal =
             smooth_temporal_weights(result.temporal, settings.weight_smoothing, result.weight_smoothing);
-    result.temporal_rank = result.temporal.leftCols(rank);
-    result.leverages = training || smooth ? training_leverages(training ? training->projector(basis, rank)
-                                                                        : basis.temporal.leftCols(rank),
-                                                               result.temporal_rank)
-                                          : lowrank::leverages(basis, rank);
+    result.temporal_rank = result.temporal.leftCols(kept_modes);
+    result.leverages = training || smooth
+                           ? training_leverages(training ? training->projector(basis, kept_modes)
+                                                         : basis.temporal.leftCols(kept_modes),
+                                                result.temporal_rank)
+                           : lowrank::leverages(basis, kept_modes);
     if (settings.optimal_shrinkage)
-        result.shrinkage = lowrank::optimal_shrinkage_factors(basis, noise_sigma, rank);
-    result.projected = settings.mode_filter.enabled ? std::max(result.rebuild_modes, surveyed) : rank;
+        result.shrinkage = lowrank::optimal_shrinkage_factors(basis, noise_sigma, kept_modes);
+    result.projected = settings.mode_filter.enabled ? std::max(result.rebuild_modes, surveyed) : kept_modes;
     result.temporal_projected =
         training ? training->projector(basis, result.projected) : basis.temporal.leftCols(result.projected);
     result.output_modes = settings.mode_filter.enabled ? result.rebuild_modes
-                          : settings.optimal_shrinkage ? rank
+                          : settings.optimal_shrinkage ? kept_modes
                                                        : 0;
     return result;
 }
@@ -75,7 +77,7 @@ void BandRebuilder::prepare(const Band& data, int row, int end, const lowrank::M
     lowrank::MutableBandView coefficient_view{m_coefficients.data(), data.rows, m_modes.projected, data.rows};
     lowrank::project_coefficients(noisy, m_modes.temporal_projected, coefficient_view);
     if (residual) {
-        for (int j = 0; j < m_modes.rank; ++j)
+        for (int j = 0; j < m_modes.kept_modes; ++j)
             std::copy_n(m_coefficients.begin() + j * data.rows + offset, valid,
                         residual->data + j * residual->frame_stride);
     }
@@ -86,7 +88,7 @@ void BandRebuilder::prepare(const Band& data, int row, int end, const lowrank::M
     const std::int64_t rebuilt_stride = (residual_end - residual_begin) * row_samples;
     m_rebuilt.resize(static_cast<size_t>(rebuilt_stride) * frames);
     lowrank::rebuild_from_coefficients(
-        {m_coefficients.data() + residual_first, rebuilt_stride, m_modes.rank, data.rows},
+        {m_coefficients.data() + residual_first, rebuilt_stride, m_modes.kept_modes, data.rows},
         m_modes.temporal_rank, {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride});
     // The filter reads the noisy band, which the means may overwrite: it goes first.
     if (m_settings.mode_filter.enabled)
@@ -95,8 +97,9 @@ void BandRebuilder::prepare(const Band& data, int row, int end, const lowrank::M
     m_noise_variance.resize(static_cast<size_t>(valid));
     lowrank::residual_noise_variance(
         {noisy.data + residual_first, rebuilt_stride, frames, noisy.frame_stride},
-        {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride}, shape, m_modes.rank, row - residual_begin,
-        end - residual_begin, m_confidence, m_noise_variance.data(), means, means_stride);
+        {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride}, shape, m_modes.kept_modes,
+        row - residual_begin, end - residual_begin, m_confidence, m_noise_variance.data(), means,
+        means_stride);
     for (size_t j = 0; j < m_modes.shrinkage.size(); ++j) // --shrink optimal, the band's own rows
         for (std::int64_t i = 0; i < valid; ++i)
             m_coefficients[j * data.rows + offset + i] *= static_cast<float>(m_modes.shrinkage[j]);
@@ -127,7 +130,7 @@ void BandRebuilder::filter(const Band& data, int row, int end, std::vector<float
     if (ranks) {
         std::vector<float> weights;
         local_rank(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin, m_plan,
-                   m_modes.rank, modes, m_gains, m_settings.rank_map.radius, weights, *ranks);
+                   m_modes.kept_modes, modes, m_gains, m_settings.rank_map.radius, weights, *ranks);
         for (int j = 0; j < modes; ++j)
             for (std::int64_t i = 0; i < valid; ++i) {
                 const float weight = weights[static_cast<size_t>(j * valid_pixels + i / m_shape.channels)];

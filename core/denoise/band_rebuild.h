@@ -23,7 +23,7 @@ namespace modestack::denoise {
 
 /// The temporal matrices of pass 2.
 struct RebuildBasis {
-    int rank = 0;          ///< N
+    int kept_modes = 0;    ///< N
     int rebuild_modes = 0; ///< modes the outputs are rebuilt from (more than N with --rank-map)
     int projected = 0;     ///< modes projected on (the mode filter's noise estimate needs its survey's)
     int output_modes = 0;  ///< modes the outputs are rebuilt from changed coefficients (0: the unfiltered N)
@@ -38,8 +38,8 @@ struct RebuildBasis {
 /// The matrices for N = `rank` modes of `basis`; `surveyed` modes the mode filter
 /// surveyed (0 without it), `training` the --train-frames sums (null: none),
 /// `noise_sigma` the rank rule's noise level (for --shrink optimal).
-RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& basis, int rank, int surveyed,
-                                const TrainingGram* training, double noise_sigma);
+RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& basis, int kept_modes,
+                                int surveyed, const TrainingGram* training, double noise_sigma);
 
 /// The mode filter's feature rows over `data`'s rows (with its halo) in
 /// `features`, or null when no feature guides it (`filter.feature_channels` 0).

@@ -43,7 +43,7 @@ std::string solver_name(Solver solver);
 /// Every setting of a denoise run.
 struct Settings {
     Solver solver = Solver::Auto;
-    lowrank::RankRuleOptions rank; ///< rule (default press) or fixed N
+    lowrank::RankRuleOptions rank_rule; ///< rule (default press) or fixed N
     lowrank::OutlierOptions outliers;
     int sigma_radius = 2; ///< spatial pooling radius of the sigma estimate (pixels)
     std::int64_t max_memory_bytes = std::int64_t(2) << 30;
@@ -89,7 +89,7 @@ struct Report {
     BandPlan plan;
     std::string solver;
     int passes = 0; ///< reads of the whole shot
-    lowrank::RankDecision rank;
+    lowrank::RankDecision rank_decision;
     std::vector<double> singular_values;             ///< σ_j, descending
     std::vector<double> explained;                   ///< σ_j² / total energy, per mode
     std::vector<std::vector<double>> temporal_modes; ///< pt(t, j) for j < N: [j][t]

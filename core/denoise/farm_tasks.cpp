@@ -114,8 +114,9 @@ TaskResult<SolvedSums> solve_task(const PassContext& context, const Statistics& 
     result.output.outliers = shot.outliers;
     const Solution solution = solution_from_gram(context.settings, result.output.gram);
     result.report.outliers = shot.outliers;
-    result.report.rank = solution.rank;
-    describe_solution(context.settings, result.report.shape, solution, solution.rank.rank, result.report);
+    result.report.rank_decision = solution.rank_decision;
+    describe_solution(context.settings, result.report.shape, solution, solution.rank_decision.kept_modes,
+                      result.report);
     result.report.seconds_solve = seconds_since(start);
     return result;
 }
@@ -128,7 +129,7 @@ TaskResult<SurveyRows> survey_task(const PassContext& context, const SolvedSums&
     const auto start = Clock::now();
     const Solution solution = solution_from_gram(context.settings, solved.gram);
     result.report.outliers = solved.outliers;
-    result.report.rank = solution.rank;
+    result.report.rank_decision = solution.rank_decision;
     result.output.row_begin = row_begin;
     result.output.row_end = row_end;
     if (context.settings.mode_filter.enabled) {
@@ -138,7 +139,8 @@ TaskResult<SurveyRows> survey_task(const PassContext& context, const SolvedSums&
         result.report.passes = stream.passes();
         result.report.seconds_filter_survey = seconds_since(survey_start);
     } else { // nothing to survey: the task reports the modes as the solve did
-        describe_solution(context.settings, result.report.shape, solution, solution.rank.rank, result.report);
+        describe_solution(context.settings, result.report.shape, solution, solution.rank_decision.kept_modes,
+                          result.report);
     }
     result.report.seconds_solve =
         seconds_since(start) - result.report.seconds_filter_survey + solution.seconds;
@@ -165,7 +167,7 @@ TaskResult<ModeImages> modes_task(const PassContext& context, const SolvedSums& 
     ModeImages& images = result.output;
     images.row_begin = row_begin;
     images.row_end = row_end;
-    images.residual_modes = modes.rank;
+    images.residual_modes = modes.kept_modes;
     images.output_modes = modes.output_modes;
     images.gain_modes = settings.mode_filter.enabled ? modes.rebuild_modes : 0;
     images.residual.resize(static_cast<size_t>(samples) * images.residual_modes);
@@ -217,7 +219,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     const auto start = Clock::now();
     BandRebuilder rebuilder(settings, shape, modes, plan.filter, modes_of.survey.plan, modes_of.survey.modes,
                             nullptr);
-    const ShotModes shot = join_modes_bands(bands, shape, modes.rank, modes.output_modes,
+    const ShotModes shot = join_modes_bands(bands, shape, modes.kept_modes, modes.output_modes,
                                             settings.mode_filter.enabled ? modes.rebuild_modes : 0);
     std::vector<int> written;
     for (int t = 0; t < shape.frames; ++t)
@@ -227,7 +229,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     const lowrank::ImageBandShape image{shape.width, shape.height, shape.channels};
     const Eigen::MatrixXd output_temporal = modes.temporal.leftCols(std::max(shot.output_modes, 1));
     report.passes = 1;
-    context.sink.begin({modes.rank, report.rank.rule, report.solver});
+    context.sink.begin({modes.kept_modes, report.rank_decision.rule, report.solver});
     context.progress.begin(fmt::format("writing {} of {} frames", written.size(), shape.frames),
                            static_cast<std::int64_t>(written.size()));
     struct Buffers {

@@ -101,7 +101,7 @@ protected:
 
 /// What is decided before the first rebuilt row: outputs record it.
 struct RebuildStart {
-    int rank = 0;
+    int kept_modes = 0;
     std::string rank_rule;
     std::string solver;
 };

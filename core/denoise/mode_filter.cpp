@@ -290,7 +290,7 @@ void SureSurvey::restore_row_sums(int row_begin, std::vector<std::vector<double>
     }
 }
 
-ModeFilterPlan SureSurvey::finish(int fixed_rank) const
+ModeFilterPlan SureSurvey::finish(int fixed_modes) const
 {
     const int candidates = static_cast<int>(m_candidates.size());
     std::vector<double> totals(static_cast<std::size_t>(m_modes) * candidates * 2 + 2 * m_modes + 1, 0.0);
@@ -332,44 +332,47 @@ ModeFilterPlan SureSurvey::finish(int fixed_rank) const
         cumulative_gain.push_back(gain);
         plan.modes.push_back(choice);
     }
-    if (fixed_rank > 0) {
-        plan.rank = std::min(fixed_rank, m_modes);
-        plan.reasoning = fmt::format("N = {} as asked; each mode's filter width chosen by SURE", plan.rank);
+    if (fixed_modes > 0) {
+        plan.kept_modes = std::min(fixed_modes, m_modes);
+        plan.reasoning =
+            fmt::format("N = {} as asked; each mode's filter width chosen by SURE", plan.kept_modes);
     } else {
-        plan.rank = 1;
+        plan.kept_modes = 1;
         for (int n = 2; n <= m_modes; ++n)
-            if (cumulative_gain[n - 1] > cumulative_gain[plan.rank - 1])
-                plan.rank = n;
+            if (cumulative_gain[n - 1] > cumulative_gain[plan.kept_modes - 1])
+                plan.kept_modes = n;
         double total = 0;
         for (int j = 0; j < m_modes; ++j)
             total += energy[j];
-        plan.reasoning = fmt::format(
-            "mode-filter SURE: the first {} of {} surveyed modes, each filtered at its SURE-best width, lower the "
-            "estimated error most ({:.3g} of the surveyed energy)",
-            plan.rank, m_modes, total > 0 ? cumulative_gain[plan.rank - 1] / total : 0.0);
+        plan.reasoning = fmt::format("mode-filter SURE: the first {} of {} surveyed modes, each filtered at "
+                                     "its SURE-best width, lower the "
+                                     "estimated error most ({:.3g} of the surveyed energy)",
+                                     plan.kept_modes, m_modes,
+                                     total > 0 ? cumulative_gain[plan.kept_modes - 1] / total : 0.0);
     }
-    for (int j = 0; j < plan.rank; ++j)
+    for (int j = 0; j < plan.kept_modes; ++j)
         plan.modes[j].kept = true;
     return plan;
 }
 
 void filter_coefficients(const BandView& coefficients, const std::vector<float>& noise_variance,
                          const ImageBandShape& shape, int valid_y0, int valid_y1, const ModeFilterPlan& plan,
-                         int rank, MutableBandView filtered, std::vector<float>& gains, const float* features)
+                         int kept_modes, MutableBandView filtered, std::vector<float>& gains,
+                         const float* features)
 {
     check_band(coefficients, noise_variance, shape, valid_y0, valid_y1, "filter_coefficients");
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
-    if (rank > coefficients.frames || rank > static_cast<int>(plan.modes.size()) || filtered.frames != rank ||
-        filtered.rows != row_length * (valid_y1 - valid_y0))
+    if (kept_modes > coefficients.frames || kept_modes > static_cast<int>(plan.modes.size()) ||
+        filtered.frames != kept_modes || filtered.rows != row_length * (valid_y1 - valid_y0))
         throw internal_error("filter_coefficients: output does not match the plan");
     const std::int64_t valid_pixels = static_cast<std::int64_t>(shape.width) * (valid_y1 - valid_y0);
-    gains.assign(static_cast<std::size_t>(valid_pixels) * rank, 1.0f);
+    gains.assign(static_cast<std::size_t>(valid_pixels) * kept_modes, 1.0f);
     if (plan.feature_channels > 0 && !features)
         throw internal_error("filter_coefficients: the plan expects feature rows");
     throw_if_cancelled();
     // Each mode: unfiltered (copied), a plain Gaussian (separable), or guided.
     std::vector<GuidedImage> guided;
-    for (int j = 0; j < rank; ++j) {
+    for (int j = 0; j < kept_modes; ++j) {
         const FilterCandidate& candidate = plan.candidates[plan.modes[j].candidate];
         const float* image = coefficients.data + j * coefficients.frame_stride;
         float* out = filtered.data + j * filtered.frame_stride;

@@ -96,7 +96,7 @@ struct ModeFilterChoice {
 struct ModeFilterPlan {
     std::vector<FilterCandidate> candidates;
     std::vector<ModeFilterChoice> modes;  ///< one per surveyed mode, in mode order
-    int rank = 0;                         ///< modes kept
+    int kept_modes = 0;                   ///< modes kept
     int survey_stride = 1;                ///< pixel grid step of the survey
     double guide_smoothing = 1.0;         ///< pre-smoothing of the guide, as surveyed
     int feature_channels = 0;             ///< feature channels the filter expects with each band
@@ -131,7 +131,7 @@ public:
                   const float* features = nullptr);
     /// Chooses a filter per mode and N: `fixed_rank` > 0 keeps that many modes,
     /// 0 keeps the prefix that maximises Σ (signal − SURE) (at least 1).
-    ModeFilterPlan finish(int fixed_rank) const;
+    ModeFilterPlan finish(int fixed_modes) const;
 
     /// The sums of image rows [row_begin, row_end) as add_band left them (empty for
     /// rows not added), and their restoration, for a survey split over farm tasks
@@ -158,7 +158,7 @@ private:
 /// (plan.feature_channels per pixel).
 void filter_coefficients(const lowrank::BandView& coefficients, const std::vector<float>& noise_variance,
                          const lowrank::ImageBandShape& shape, int valid_y0, int valid_y1,
-                         const ModeFilterPlan& plan, int rank, lowrank::MutableBandView filtered,
+                         const ModeFilterPlan& plan, int kept_modes, lowrank::MutableBandView filtered,
                          std::vector<float>& gains, const float* features = nullptr);
 
 }  // namespace modestack::denoise

@@ -46,7 +46,7 @@ RunPlan plan_run(const PassContext& context, bool with_features);
 /// The temporal modes and N.
 struct Solution {
     lowrank::Basis basis;
-    lowrank::RankDecision rank;
+    lowrank::RankDecision rank_decision;
     std::optional<TrainingGram> training; ///< --train-frames: the projection and the rebuild differ
     double seconds = 0;                   ///< the eigensolve or randomized SVD
 };
@@ -56,7 +56,7 @@ struct Solution {
 struct Survey {
     int modes = 0; ///< modes surveyed (0: no mode filter)
     ModeFilterPlan plan;
-    lowrank::RankDecision rank;
+    lowrank::RankDecision rank_decision;
 };
 
 /// Pass 1 of a whole run with the Gram solver (or --train-frames) and the solve.
@@ -104,7 +104,7 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
 
 /// The report's description of the modes: singular values, explained energy,
 /// pt(t, j) for j < N and the preview beyond it.
-void describe_solution(const Settings& settings, const ShotShape& shape, const Solution& solution, int rank,
-                       Report& report);
+void describe_solution(const Settings& settings, const ShotShape& shape, const Solution& solution,
+                       int kept_modes, Report& report);
 
 } // namespace modestack::denoise

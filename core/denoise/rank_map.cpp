@@ -23,12 +23,12 @@ void RankMapSummary::add(const std::vector<float>& ranks)
 {
     if (histogram.empty())
         histogram.assign(static_cast<size_t>(largest_rank) + 1, 0);
-    for (float rank : ranks) {
-        const int bin = std::clamp(static_cast<int>(std::floor(rank)), 0, largest_rank);
+    for (float kept_modes : ranks) {
+        const int bin = std::clamp(static_cast<int>(std::floor(kept_modes)), 0, largest_rank);
         ++histogram[static_cast<size_t>(bin)];
-        m_micro_rank_sum += std::llround(static_cast<double>(rank) * 1e6);
-        smallest = m_any ? std::min(smallest, static_cast<double>(rank)) : rank;
-        largest = m_any ? std::max(largest, static_cast<double>(rank)) : rank;
+        m_micro_rank_sum += std::llround(static_cast<double>(kept_modes) * 1e6);
+        smallest = m_any ? std::min(smallest, static_cast<double>(kept_modes)) : kept_modes;
+        largest = m_any ? std::max(largest, static_cast<double>(kept_modes)) : kept_modes;
         m_any = true;
     }
     m_pixels += static_cast<std::int64_t>(ranks.size());

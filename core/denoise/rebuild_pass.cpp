@@ -16,18 +16,18 @@ namespace {
 
 // Spatial modes ps(x, y, j) = coefficient_j / σ_j of rows [row, end), for inspection ([0048]).
 void write_spatial_modes(FrameSink& sink, const ShotShape& shape, const ScratchBuffer<float>& coefficients,
-                         const Band& data, const Solution& solution, int rank, int row, int end,
+                         const Band& data, const Solution& solution, int kept_modes, int row, int end,
                          std::int64_t offset)
 {
     const std::int64_t samples = static_cast<std::int64_t>(shape.width) * (end - row) * shape.channels;
-    std::vector<float> modes(static_cast<size_t>(samples) * rank);
-    for (int j = 0; j < rank; ++j) {
+    std::vector<float> modes(static_cast<size_t>(samples) * kept_modes);
+    for (int j = 0; j < kept_modes; ++j) {
         const double singular = solution.basis.singular_values[j];
         const double scale = solution.training ? 1.0 : singular > 0 ? 1.0 / singular : 0.0;
         for (std::int64_t i = 0; i < samples; ++i)
             modes[j * samples + i] = static_cast<float>(coefficients[j * data.rows + offset + i] * scale);
     }
-    sink.write_mode_rows(row, end, rank, modes.data());
+    sink.write_mode_rows(row, end, kept_modes, modes.data());
 }
 
 } // namespace
@@ -35,12 +35,12 @@ void write_spatial_modes(FrameSink& sink, const ShotShape& shape, const ScratchB
 RebuildBasis chosen_modes(const Settings& settings, const ShotShape& shape, const Solution& solution,
                           const Survey& survey, Report& report)
 {
-    report.rank = survey.rank;
+    report.rank_decision = survey.rank_decision;
     report.mode_filter = survey.plan;
-    describe_solution(settings, shape, solution, survey.rank.rank, report);
-    RebuildBasis modes = make_rebuild_basis(settings, solution.basis, survey.rank.rank, survey.modes,
-                                            solution.training ? &*solution.training : nullptr,
-                                            survey.rank.noise_sigma);
+    describe_solution(settings, shape, solution, survey.rank_decision.kept_modes, report);
+    RebuildBasis modes = make_rebuild_basis(settings, solution.basis, survey.rank_decision.kept_modes,
+                                            survey.modes, solution.training ? &*solution.training : nullptr,
+                                            survey.rank_decision.noise_sigma);
     report.shrinkage = modes.shrinkage;
     report.weight_smoothing = modes.weight_smoothing;
     return modes;
@@ -51,7 +51,7 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
 {
     const Settings& settings = context.settings;
     const ShotShape& shape = stream.shape();
-    const int rank = modes.rank;
+    const int kept_modes = modes.kept_modes;
     const bool rank_map = settings.rank_map.enabled, filter = settings.mode_filter.enabled;
     const int frames = shape.frames, output = modes.output_modes;
     const std::int64_t row_samples = stream.row_samples();
@@ -63,7 +63,7 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
     stream.ensure_whole_shot();
     if (!kept)
         stream.count_pass();
-    context.sink.begin({rank, survey.rank.rule, solver_name(plan.solver)});
+    context.sink.begin({kept_modes, survey.rank_decision.rule, solver_name(plan.solver)});
     context.progress.begin("rebuilding frames", shape.height);
     if (rank_map)
         report.rank_map.largest_rank = modes.rebuild_modes;
@@ -125,8 +125,8 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
                 data.pass_through.empty() ? nullptr : &data.pass_through[static_cast<size_t>(frame)]);
         });
         if (context.sink.wants_modes())
-            write_spatial_modes(context.sink, shape, rebuilder.coefficients(), data, solution, rank, row, end,
-                                offset);
+            write_spatial_modes(context.sink, shape, rebuilder.coefficients(), data, solution, kept_modes,
+                                row, end, offset);
         if (rank_map) {
             context.sink.write_rank_rows(row, end, ranks.data());
             report.rank_map.add(ranks);

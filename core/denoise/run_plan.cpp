@@ -31,10 +31,10 @@ void check_settings(const Settings& settings, const ShotShape& shape)
         check_training_frames(settings, shape.frames);
     // What the command's validation step already refused (app/denoise_job.cpp,
     // method_options.cpp): reaching here is a bug, so an internal error.
-    if (settings.rank.rule == lowrank::RankRule::Fixed &&
-        (settings.rank.fixed_rank < 1 || settings.rank.fixed_rank >= shape.frames))
+    if (settings.rank_rule.rule == lowrank::RankRule::Fixed &&
+        (settings.rank_rule.fixed_modes < 1 || settings.rank_rule.fixed_modes >= shape.frames))
         throw internal_error(fmt::format("--rank {} is out of range: use 1 to {} for {} frames",
-                                         settings.rank.fixed_rank, shape.frames - 1, shape.frames));
+                                         settings.rank_rule.fixed_modes, shape.frames - 1, shape.frames));
     if (settings.sigma_radius < 0)
         throw internal_error("--sigma-radius must be 0 or more");
     if (settings.rank_map.enabled && !settings.mode_filter.enabled)
@@ -53,8 +53,9 @@ RunPlan plan_run(const PassContext& context, bool with_features)
     const Settings& settings = context.settings;
     const ShotShape shape = context.source.shape();
     RunPlan plan;
-    const int largest_rank = settings.rank.rule == lowrank::RankRule::Fixed ? settings.rank.fixed_rank
-                                                                            : std::min(shape.frames - 1, 32);
+    const int largest_rank = settings.rank_rule.rule == lowrank::RankRule::Fixed
+                                 ? settings.rank_rule.fixed_modes
+                                 : std::min(shape.frames - 1, 32);
     // Sigma's window reads radius + 1 rows around a pixel (see confidence.h); the
     // mode filter reads its kernel and guide around a pixel.
     PassNeeds needs;

@@ -63,7 +63,7 @@ Solution solved(lowrank::Basis basis, const Settings& settings, std::optional<Tr
                 double seconds)
 {
     Solution solution{std::move(basis), {}, std::move(training), seconds};
-    solution.rank = lowrank::choose_rank(solution.basis, settings.rank);
+    solution.rank_decision = lowrank::choose_rank(solution.basis, settings.rank_rule);
     return solution;
 }
 
@@ -105,10 +105,10 @@ Solution randomized_solution(const PassContext& context, ShotStream& stream)
             });
         });
     };
-    const int modes =
-        std::min(shape.frames - 1,
-                 std::max(settings.randomized_modes,
-                          settings.rank.rule == lowrank::RankRule::Fixed ? settings.rank.fixed_rank + 2 : 0));
+    const int modes = std::min(shape.frames - 1, std::max(settings.randomized_modes,
+                                                          settings.rank_rule.rule == lowrank::RankRule::Fixed
+                                                              ? settings.rank_rule.fixed_modes + 2
+                                                              : 0));
     lowrank::Basis basis =
         lowrank::randomized_svd(pass, shape.frames, modes, settings.randomized, Progress::silent());
     return solved(std::move(basis), settings, std::nullopt, 0);
@@ -146,8 +146,8 @@ Statistics block_statistics(const PassContext& context, ShotStream& stream, int 
     return {row_begin, row_end, std::move(gram.blocks()), stream.outliers()};
 }
 
-void describe_solution(const Settings& settings, const ShotShape& shape, const Solution& solution, int rank,
-                       Report& report)
+void describe_solution(const Settings& settings, const ShotShape& shape, const Solution& solution,
+                       int kept_modes, Report& report)
 {
     const lowrank::Basis& basis = solution.basis;
     const double total = basis.frame_energy.sum();
@@ -166,11 +166,11 @@ void describe_solution(const Settings& settings, const ShotShape& shape, const S
                 weights[static_cast<size_t>(j)][static_cast<size_t>(t)] = temporal(t, j);
         return weights;
     };
-    report.temporal_modes = temporal_modes(rank);
+    report.temporal_modes = temporal_modes(kept_modes);
     if (settings.report_modes <= 0)
         return;
     const int preview =
-        std::min({std::max(2 * rank, settings.report_modes), shape.frames - 1, basis.modes()});
+        std::min({std::max(2 * kept_modes, settings.report_modes), shape.frames - 1, basis.modes()});
     report.preview_temporal_modes = temporal_modes(preview);
 }
 

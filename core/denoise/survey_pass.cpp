@@ -14,8 +14,8 @@ namespace modestack::denoise {
 int survey_modes(const Settings& settings, const ShotShape& shape, const lowrank::Basis& basis)
 {
     int modes = std::min({settings.mode_filter.max_modes, shape.frames - 2, basis.modes()});
-    if (settings.rank.rule == lowrank::RankRule::Fixed)
-        modes = std::max(modes, settings.rank.fixed_rank);
+    if (settings.rank_rule.rule == lowrank::RankRule::Fixed)
+        modes = std::max(modes, settings.rank_rule.fixed_modes);
     return std::max(1, modes);
 }
 
@@ -62,13 +62,13 @@ Survey finish_survey(const Settings& settings, const ShotShape& shape, const Run
     result.modes = survey_modes(settings, shape, solution.basis);
     SureSurvey survey(plan.filter, shape.width, shape.height, shape.channels, result.modes);
     survey.restore_row_sums(0, std::move(rows));
-    const bool fixed = settings.rank.rule == lowrank::RankRule::Fixed;
-    result.plan = survey.finish(fixed ? settings.rank.fixed_rank : 0);
-    result.rank = solution.rank;
+    const bool fixed = settings.rank_rule.rule == lowrank::RankRule::Fixed;
+    result.plan = survey.finish(fixed ? settings.rank_rule.fixed_modes : 0);
+    result.rank_decision = solution.rank_decision;
     if (!fixed) {
-        result.rank.rank = result.plan.rank;
-        result.rank.rule = "sure";
-        result.rank.reasoning = result.plan.reasoning;
+        result.rank_decision.kept_modes = result.plan.kept_modes;
+        result.rank_decision.rule = "sure";
+        result.rank_decision.reasoning = result.plan.reasoning;
     }
     return result;
 }
@@ -76,7 +76,7 @@ Survey finish_survey(const Settings& settings, const ShotShape& shape, const Run
 Survey unfiltered_survey(const Solution& solution)
 {
     Survey result;
-    result.rank = solution.rank;
+    result.rank_decision = solution.rank_decision;
     return result;
 }
 

@@ -92,9 +92,9 @@ void check_training_frames(const Settings& settings, int frames)
     for (int k = 0; k < count; ++k)
         if (training[k] < 0 || training[k] >= frames || (k > 0 && training[k] <= training[k - 1]))
             throw usage_error("--train-frames: the frames must be frames of the shot, in ascending order");
-    if (settings.rank.rule == lowrank::RankRule::Fixed && settings.rank.fixed_rank >= count)
+    if (settings.rank_rule.rule == lowrank::RankRule::Fixed && settings.rank_rule.fixed_modes >= count)
         throw usage_error(fmt::format("--rank {} needs more than {} training frames (--train-frames)",
-                                      settings.rank.fixed_rank, count));
+                                      settings.rank_rule.fixed_modes, count));
     if (settings.mode_filter.enabled)
         throw usage_error("--train-frames needs --no-mode-filter");
     if (settings.solver == Solver::RandomizedSvd)

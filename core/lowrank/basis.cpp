@@ -54,11 +54,11 @@ Basis basis_from_gram(const GramAccumulator& accumulator)
     return basis;
 }
 
-Eigen::VectorXd leverages(const Basis& basis, int rank)
+Eigen::VectorXd leverages(const Basis& basis, int kept_modes)
 {
-    if (rank < 0 || rank > basis.modes())
+    if (kept_modes < 0 || kept_modes > basis.modes())
         throw internal_error("leverages: rank outside the available modes");
-    return basis.temporal.leftCols(rank).rowwise().squaredNorm();
+    return basis.temporal.leftCols(kept_modes).rowwise().squaredNorm();
 }
 
 } // namespace modestack::lowrank

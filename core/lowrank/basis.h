@@ -51,6 +51,6 @@ void normalize_signs(Eigen::MatrixXd& vectors);
 
 /// Leverages h_t = Σ_{j<rank} V_tj² of the rank-`rank` projection (length F): the
 /// diagonal of the hat matrix V_N V_Nᵀ.
-Eigen::VectorXd leverages(const Basis& basis, int rank);
+Eigen::VectorXd leverages(const Basis& basis, int kept_modes);
 
 } // namespace modestack::lowrank

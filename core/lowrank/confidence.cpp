@@ -224,13 +224,13 @@ double window_size(const ImageBandShape& shape, int radius, int x, int y)
 
 } // namespace
 
-void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape, int rank,
-                             int valid_y0, int valid_y1, const ConfidenceOptions& options, float* noise_variance,
-                             float* means, std::int64_t means_stride)
+void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
+                             int kept_modes, int valid_y0, int valid_y1, const ConfidenceOptions& options,
+                             float* noise_variance, float* means, std::int64_t means_stride)
 {
     check_band(noisy, rebuilt, shape, valid_y0, valid_y1, options.radius);
     const int frames = noisy.frames;
-    if (rank < 0 || rank >= frames)
+    if (kept_modes < 0 || kept_modes >= frames)
         throw internal_error("confidence: rank must be less than the number of frames");
     const std::int64_t samples = static_cast<std::int64_t>(shape.width) * shape.channels * (valid_y1 - valid_y0);
     if (samples == 0)
@@ -268,7 +268,7 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
             }
         });
     }
-    const double degrees_of_freedom = frames - rank;
+    const double degrees_of_freedom = frames - kept_modes;
     for (std::int64_t i = 0; i < samples; ++i)
         noise_variance[i] = static_cast<float>(energy[static_cast<std::size_t>(i)] / degrees_of_freedom);
 }
@@ -316,7 +316,7 @@ void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1, co
 }
 
 void confidence_band(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
-                     const Eigen::VectorXd& leverages, int rank, int valid_y0, int valid_y1,
+                     const Eigen::VectorXd& leverages, int kept_modes, int valid_y0, int valid_y1,
                      const ConfidenceOptions& options, MutableBandView sigma, const BandView* kept_noise)
 {
     const int frames = noisy.frames;
@@ -329,7 +329,8 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
     if (sigma.rows == 0)
         return;
     std::vector<float> noise_variance(static_cast<std::size_t>(sigma.rows));
-    residual_noise_variance(noisy, rebuilt, shape, rank, valid_y0, valid_y1, options, noise_variance.data());
+    residual_noise_variance(noisy, rebuilt, shape, kept_modes, valid_y0, valid_y1, options,
+                            noise_variance.data());
     tbb::parallel_for(0, frames, [&](int t) {
         frame_sigma(noisy.data + t * noisy.frame_stride, rebuilt.data + t * rebuilt.frame_stride, shape, valid_y0,
                     valid_y1, options, noise_variance.data(), leverages(t),

@@ -58,7 +58,7 @@ struct ConfidenceOptions {
 /// (core/denoise/mode_filter.h) keeps less than h_t of the noise, a different amount
 /// at each pixel. The residual (and so s² and the bias) still comes from `rebuilt`.
 void confidence_band(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
-                     const Eigen::VectorXd& leverages, int rank, int valid_y0, int valid_y1,
+                     const Eigen::VectorXd& leverages, int kept_modes, int valid_y0, int valid_y1,
                      const ConfidenceOptions& options, MutableBandView sigma,
                      const BandView* kept_noise = nullptr);
 
@@ -72,9 +72,9 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
 /// every residual once and finishes with sigma_from_mean. `means` may be the
 /// output rows of `noisy` itself: a frame's noisy values are all read before its
 /// mean is written (a streamed band needs no other buffer for sigma) ...
-void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape, int rank,
-                             int valid_y0, int valid_y1, const ConfidenceOptions& options, float* noise_variance,
-                             float* means = nullptr, std::int64_t means_stride = 0);
+void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
+                             int kept_modes, int valid_y0, int valid_y1, const ConfidenceOptions& options,
+                             float* noise_variance, float* means = nullptr, std::int64_t means_stride = 0);
 
 /// ... and sigma of one frame from its noisy and rebuilt values (whole band in
 /// `shape`), s² and the frame's leverage h_t, or its kept noise per sample

@@ -84,17 +84,17 @@ Eigen::MatrixXd gaussian_matrix(int rows, int columns, std::uint64_t seed)
     return matrix;
 }
 
-Basis randomized_svd(const BandPass& pass, int frames, int rank, const RandomizedSvdOptions& options,
+Basis randomized_svd(const BandPass& pass, int frames, int kept_modes, const RandomizedSvdOptions& options,
                      Progress& progress)
 {
     if (frames < 1)
         throw internal_error("randomized SVD needs at least one frame");
-    if (rank < 1 || rank > frames)
-        throw usage_error("rank " + std::to_string(rank) + " is outside 1.." + std::to_string(frames) +
+    if (kept_modes < 1 || kept_modes > frames)
+        throw usage_error("rank " + std::to_string(kept_modes) + " is outside 1.." + std::to_string(frames) +
                           " (the number of frames)");
     if (options.oversampling < 0 || options.power_iterations < 0)
         throw usage_error("randomized SVD oversampling and power iterations must not be negative");
-    const int columns = std::min(frames, rank + options.oversampling);
+    const int columns = std::min(frames, kept_modes + options.oversampling);
     const int total_passes = options.power_iterations + 2;
     progress.begin("randomized SVD", total_passes);
 
@@ -117,9 +117,9 @@ Basis randomized_svd(const BandPass& pass, int frames, int rank, const Randomize
         throw internal_error("randomized SVD: small eigenproblem did not converge");
 
     Basis basis;
-    basis.singular_values.resize(rank);
-    basis.temporal.resize(frames, rank);
-    for (int j = 0; j < rank; ++j) {
+    basis.singular_values.resize(kept_modes);
+    basis.temporal.resize(frames, kept_modes);
+    for (int j = 0; j < kept_modes; ++j) {
         const Eigen::Index source = columns - 1 - j; // Eigen sorts ascending
         basis.singular_values(j) = std::sqrt(std::max(0.0, solver.eigenvalues()(source)));
         basis.temporal.col(j) = q * solver.eigenvectors().col(source);

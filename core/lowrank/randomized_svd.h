@@ -37,7 +37,7 @@ struct RandomizedSvdOptions {
 /// Throws modestack::Error (usage) for rank < 1 or rank > frames, (internal) for
 /// inconsistent bands, and stops with an Error when a cancel was requested.
 /// Progress gets one unit per pass.
-Basis randomized_svd(const BandPass& pass, int frames, int rank, const RandomizedSvdOptions& options,
+Basis randomized_svd(const BandPass& pass, int frames, int kept_modes, const RandomizedSvdOptions& options,
                      Progress& progress);
 
 /// An F×columns matrix of standard normal numbers, reproducible from `seed` on

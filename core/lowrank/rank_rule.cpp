@@ -233,7 +233,7 @@ RankDecision rank_by_press(const Basis& basis)
     for (int n = 2; n <= max_rank; ++n)
         if (decision.score[static_cast<std::size_t>(n)] < decision.score[static_cast<std::size_t>(best)])
             best = n;
-    decision.rank = best;
+    decision.kept_modes = best;
     const double at_best = decision.score[static_cast<std::size_t>(best)];
     auto change = [&](int n) {
         return at_best > 0 ? 100.0 * (decision.score[static_cast<std::size_t>(n)] / at_best - 1.0) : 0.0;
@@ -268,13 +268,13 @@ RankDecision rank_by_variance(const Basis& basis, double epsilon, double epsilon
         }
     }
     if (chosen == 0) {
-        decision.rank = limit;
+        decision.kept_modes = limit;
         decision.reasoning = fmt::format("No N up to {} leaves at most {:.3g} of the variance unexplained "
                                          "with a next step of at most {:.3g}; "
                                          "keeping all {} modes.",
                                          limit, epsilon, epsilon_change, limit);
     } else {
-        decision.rank = chosen;
+        decision.kept_modes = chosen;
         decision.reasoning = fmt::format("{} modes leave {:.3g} of the variance unexplained (limit {:.3g}) "
                                          "and one more mode would explain only "
                                          "{:.3g} more (limit {:.3g}).",
@@ -302,28 +302,28 @@ RankDecision rank_by_noise_floor(const Basis& basis, std::int64_t rows)
         if (sigma > noise.floor)
             above = n;
     }
-    decision.rank = std::clamp(above, 1, largest_rank(basis));
+    decision.kept_modes = std::clamp(above, 1, largest_rank(basis));
     decision.reasoning = fmt::format("{} singular value{} above the noise floor {:.4g} (Gavish-Donoho "
                                      "threshold; noise sigma {:.4g} per sample).",
                                      above, above == 1 ? " lies" : "s lie", noise.floor, noise.sigma);
     return decision;
 }
 
-RankDecision rank_fixed(const Basis& basis, int rank)
+RankDecision rank_fixed(const Basis& basis, int kept_modes)
 {
-    if (rank < 1 || rank >= basis.frames())
+    if (kept_modes < 1 || kept_modes >= basis.frames())
         throw usage_error(fmt::format("--rank {} is out of range: it must be at least 1 and less than the "
                                       "number of frames ({})",
-                                      rank, basis.frames()));
-    if (rank > basis.modes())
+                                      kept_modes, basis.frames()));
+    if (kept_modes > basis.modes())
         throw usage_error(
-            fmt::format("--rank {} asks for more modes than were computed ({})", rank, basis.modes()));
+            fmt::format("--rank {} asks for more modes than were computed ({})", kept_modes, basis.modes()));
     RankDecision decision = make_decision(RankRule::Fixed, basis);
     decision.score = unexplained_fraction(basis);
-    decision.rank = rank;
+    decision.kept_modes = kept_modes;
     decision.reasoning =
-        fmt::format("{} modes chosen by the user; they leave {:.3g} of the variance unexplained.", rank,
-                    decision.score[static_cast<std::size_t>(rank)]);
+        fmt::format("{} modes chosen by the user; they leave {:.3g} of the variance unexplained.", kept_modes,
+                    decision.score[static_cast<std::size_t>(kept_modes)]);
     return decision;
 }
 
@@ -337,7 +337,7 @@ RankDecision choose_rank(const Basis& basis, const RankRuleOptions& options)
     case RankRule::NoiseFloor:
         return rank_by_noise_floor(basis, basis.rows);
     case RankRule::Fixed:
-        return rank_fixed(basis, options.fixed_rank);
+        return rank_fixed(basis, options.fixed_modes);
     }
     throw internal_error("unknown rank rule");
 }

@@ -28,7 +28,7 @@ RankRule parse_rank_rule(const std::string& name);
 /// The outcome of a rank rule, with what a report needs to show why.
 struct RankDecision {
     /// Chosen number of modes N (≥ 1).
-    int rank = 0;
+    int kept_modes = 0;
     /// Name of the rule that chose it (rank_rule_name).
     std::string rule;
     /// One or two sentences for humans: what the rule saw and why this N.
@@ -47,7 +47,7 @@ struct RankDecision {
 struct RankRuleOptions {
     RankRule rule = RankRule::Press;
     /// N for RankRule::Fixed.
-    int fixed_rank = 0;
+    int fixed_modes = 0;
     /// Variance rule: largest unexplained-variance fraction accepted (seed's ε).
     double variance_epsilon = 0.05;
     /// Variance rule: largest drop of that fraction from N to N+1 accepted (ε_change).
@@ -93,7 +93,7 @@ RankDecision rank_by_noise_floor(const Basis& basis, std::int64_t rows);
 
 /// `fixed`: the user's N, checked: 1 ≤ N < F and N ≤ available modes, otherwise
 /// throws modestack::Error (usage) saying the valid range. score = u(N) as `variance`.
-RankDecision rank_fixed(const Basis& basis, int rank);
+RankDecision rank_fixed(const Basis& basis, int kept_modes);
 
 /// Median of the Marchenko–Pastur law of aspect ratio β ∈ (0, 1] (numerical).
 double marchenko_pastur_median(double beta);

@@ -23,6 +23,6 @@ double optimal_shrink_frobenius(double y, double beta);
 /// Factors η(σ_j)/σ_j ∈ [0, 1] for the first `rank` modes of `basis` (rows × frames
 /// matrix; basis.rows must be set) with per-value noise standard deviation
 /// `noise_sigma` (e.g. RankDecision::noise_sigma). All 1 when the noise is 0.
-std::vector<double> optimal_shrinkage_factors(const Basis& basis, double noise_sigma, int rank);
+std::vector<double> optimal_shrinkage_factors(const Basis& basis, double noise_sigma, int kept_modes);
 
 } // namespace modestack::lowrank

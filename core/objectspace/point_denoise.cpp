@@ -30,7 +30,7 @@ PointDenoise denoise_points(denoise::FrameSource& points, denoise::Settings sett
     for (int t = 0; t < shape.frames; ++t)
         frames.push_back({noisy.frame(t), result.points.values(t), result.points.sigma(t),
                           leverages[static_cast<std::size_t>(t)]});
-    filter.rank = result.report.rank.rank;
+    filter.kept_modes = result.report.rank_decision.kept_modes;
     progress.begin("surface filter and sigma", 1);
     result.filter = filter_surfaces(samples, filter, shape.channels, frames);
     progress.end();

@@ -84,7 +84,8 @@ SurfaceFilterChoice filter_surfaces(const SurfaceSamples& samples, const Surface
     const SurfaceNeighbours neighbours(samples, std::max(kReachInSigmas * widest, window), kMinNormalCosine);
     choice.mean_neighbours = neighbours.mean_size();
 
-    const std::vector<double> noise = surface_noise_variance(neighbours, window, frames, channels, options.rank);
+    const std::vector<double> noise =
+        surface_noise_variance(neighbours, window, frames, channels, options.kept_modes);
     choice.risks = surface_sure_risks(neighbours, spacing, choice.widths, noise, frames, channels);
     const int best = static_cast<int>(std::min_element(choice.risks.begin(), choice.risks.end()) - choice.risks.begin());
     choice.width = choice.widths[best];

@@ -32,7 +32,7 @@ struct SurfaceFilterOptions {
     std::vector<double> widths;  ///< candidate Gaussian sigmas, in spacings (0 = none is always tried)
     bool filter = true;          ///< false: only sigma
     double window_spacings = 2;  ///< radius of sigma's pooling window, in spacings
-    int rank = 1;                ///< N of the rebuild
+    int kept_modes = 1;          ///< N of the rebuild
 };
 
 /// Sigma of every point and frame, as lowrank/confidence.h computes it for

@@ -10,7 +10,8 @@
 namespace modestack::objectspace {
 
 std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, double window,
-                                           const std::vector<SurfaceFrame>& frames, int channels, int rank)
+                                           const std::vector<SurfaceFrame>& frames, int channels,
+                                           int kept_modes)
 {
     const std::int64_t count = neighbours.count();
     const int frame_count = static_cast<int>(frames.size());
@@ -38,7 +39,7 @@ std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, 
         }
     });
     // Pooled over the window, per degree of freedom.
-    const double degrees = std::max(1, frame_count - rank);
+    const double degrees = std::max(1, frame_count - kept_modes);
     tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, count), [&](const tbb::blocked_range<std::int64_t>& range) {
         for (std::int64_t p = range.begin(); p != range.end(); ++p) {
             const std::int64_t* ids = neighbours.ids(p);

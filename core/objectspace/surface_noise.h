@@ -17,6 +17,7 @@ namespace modestack::objectspace {
 /// from the residuals of `frames` over the neighbours within `window` metres.
 /// `rank`: N of the rebuild.
 std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, double window,
-                                           const std::vector<SurfaceFrame>& frames, int channels, int rank);
+                                           const std::vector<SurfaceFrame>& frames, int channels,
+                                           int kept_modes);
 
 } // namespace modestack::objectspace

@@ -48,8 +48,8 @@ TEST_CASE("engine: a rank-3 shot is recovered exactly with 3 modes")
     MemoryShot shot = low_rank_shot(33, 21, 16, 0.0f, 1);
     MemorySink sink(shot.size);
     Settings settings;
-    settings.rank.rule = lowrank::RankRule::Fixed;
-    settings.rank.fixed_rank = 3;
+    settings.rank_rule.rule = lowrank::RankRule::Fixed;
+    settings.rank_rule.fixed_modes = 3;
     Report report = run_denoise(shot, sink, settings, Progress::silent());
     CHECK(report.plan.in_memory);
     CHECK(report.passes == 1);
@@ -67,7 +67,7 @@ TEST_CASE("engine: with noise, press chooses the 3 modes and the rebuild keeps a
         Settings settings;
         settings.outliers.fireflies = false;  // Gaussian noise has no fireflies to treat
         Report report = run_denoise(noisy, sink, settings, Progress::silent());
-        CHECK(report.rank.rank == 3);
+        CHECK(report.rank_decision.kept_modes == 3);
         double kept = mean_square(sink.rebuilt, clean.frames) / (0.2 * 0.2);
         CHECK(kept == doctest::Approx(3.0 / frames).epsilon(0.2));
     }
@@ -113,7 +113,7 @@ TEST_CASE("engine: streamed and kept shots, gram and rsvd, 1 and 2 threads give 
     CHECK(rsvd_kept_report.solver == "rsvd");
     CHECK(rsvd_streamed_report.passes > 2);
     CHECK(rsvd_kept.rebuilt == rsvd_streamed.rebuilt);
-    CHECK(rsvd_kept_report.rank.rank == kept_report.rank.rank);
+    CHECK(rsvd_kept_report.rank_decision.kept_modes == kept_report.rank_decision.kept_modes);
     CHECK(mean_square(rsvd_kept.rebuilt, kept.rebuilt) < 1e-10);
 }
 
@@ -125,8 +125,8 @@ TEST_CASE("engine: bad settings are usage errors before anything is written")
     MemoryShot shot = low_rank_shot(8, 8, 6, 0.0f, 1);
     MemorySink shot_sink(shot.size);
     Settings fixed;
-    fixed.rank.rule = lowrank::RankRule::Fixed;
-    fixed.rank.fixed_rank = 6;
+    fixed.rank_rule.rule = lowrank::RankRule::Fixed;
+    fixed.rank_rule.fixed_modes = 6;
     CHECK_THROWS_WITH_AS(run_denoise(shot, shot_sink, fixed, Progress::silent()), doctest::Contains("--rank 6"), Error);
     Settings tiny;
     tiny.max_memory_bytes = 1000;

@@ -56,7 +56,7 @@ TEST_CASE("filter weights: the guided filter is its clipped cross-bilateral wind
     plan.candidates = {{0.0, 0.0, 0.0}, {1.5, 2.0, 0.0}, {1.0, 1.5, 0.5}};
     plan.modes.resize(modes);
     plan.modes[1].candidate = 1, plan.modes[2].candidate = 2;
-    plan.rank = modes;
+    plan.kept_modes = modes;
     plan.guide_smoothing = 0;  // the guide is c_1 itself
     plan.feature_channels = features;
     const std::int64_t valid = std::int64_t(width) * (valid_y1 - valid_y0) * channels;

@@ -58,11 +58,11 @@ double true_error(const Images& images, const ModeFilterPlan& plan, int j)
     return error;
 }
 
-ModeFilterPlan survey(const Images& images, const ModeFilterOptions& options, int fixed_rank = 0)
+ModeFilterPlan survey(const Images& images, const ModeFilterOptions& options, int fixed_modes = 0)
 {
     SureSurvey survey(options, images.width, images.height, 1, images.modes);
     survey.add_band(images.view(), images.variance, images.shape(), 0, 0, images.height);
-    return survey.finish(fixed_rank);
+    return survey.finish(fixed_modes);
 }
 
 // A shot of `frames` frames: a bright mode with an edge, a weak smooth mode with
@@ -105,7 +105,7 @@ TEST_CASE("mode filter: SURE keeps every mode unfiltered when there is no noise"
         CHECK(choice.signal > 0);
         CHECK(choice.kept);
     }
-    CHECK(plan.rank == 3);
+    CHECK(plan.kept_modes == 3);
 }
 
 TEST_CASE("mode filter: on noisy smooth modes SURE picks a width and estimates the true error")
@@ -216,7 +216,7 @@ TEST_CASE("mode filter: the engine keeps a weak smooth mode that press drops, an
     press.outliers.fireflies = false;
     MemorySink press_sink(noisy.size);
     Report press_report = run_denoise(noisy, press_sink, press, Progress::silent());
-    CHECK(press_report.rank.rank == 1);
+    CHECK(press_report.rank_decision.kept_modes == 1);
 
     Settings filtered = press;
     filtered.mode_filter.enabled = true;
@@ -225,8 +225,8 @@ TEST_CASE("mode filter: the engine keeps a weak smooth mode that press drops, an
     filtered.sigma_radius = 8;
     MemorySink filtered_sink(noisy.size);
     Report report = run_denoise(noisy, filtered_sink, filtered, Progress::silent());
-    CHECK(report.rank.rule == "sure");
-    CHECK(report.rank.rank == 2);  // the modes beyond are noise
+    CHECK(report.rank_decision.rule == "sure");
+    CHECK(report.rank_decision.kept_modes == 2);     // the modes beyond are noise
     REQUIRE(report.mode_filter.modes.size() == 16);  // max_modes
     CHECK(report.mode_filter.modes[1].kept);
     CHECK(report.mode_filter.modes[1].width >= 1.5);
@@ -275,7 +275,7 @@ TEST_CASE("mode filter: streamed and kept shots, 1 and 2 threads give the same b
     CHECK_FALSE(streamed_report.plan.in_memory);
     CHECK(streamed_report.plan.band_rows < 160);
     CHECK(streamed_report.passes == 3);
-    CHECK(kept_report.rank.rank == streamed_report.rank.rank);
+    CHECK(kept_report.rank_decision.kept_modes == streamed_report.rank_decision.kept_modes);
     CHECK(kept_report.mode_filter.modes[1].sure == streamed_report.mode_filter.modes[1].sure);
     CHECK(kept.rebuilt == streamed.rebuilt);
     CHECK(kept.sigma == streamed.sigma);

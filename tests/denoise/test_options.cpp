@@ -55,14 +55,14 @@ MemoryShot light_shot(int width, int height, int frames, float noise, unsigned s
     return shot;
 }
 
-Settings plain(int rank = 0)
+Settings plain(int kept_modes = 0)
 {
     Settings settings;
     settings.outliers.fireflies = false;
     settings.mode_filter.enabled = false;
-    if (rank > 0) {
-        settings.rank.rule = lowrank::RankRule::Fixed;
-        settings.rank.fixed_rank = rank;
+    if (kept_modes > 0) {
+        settings.rank_rule.rule = lowrank::RankRule::Fixed;
+        settings.rank_rule.fixed_modes = kept_modes;
     }
     return settings;
 }
@@ -255,21 +255,21 @@ TEST_CASE("shrink: the Gavish-Donoho shrinker, and optimal shrinkage has no more
 
     MemoryShot clean = light_shot(48, 40, 24, 0.0f, 1);
     MemoryShot noisy = light_shot(48, 40, 24, 0.3f, 5);
-    for (int rank : {3, 6}) {
-        CAPTURE(rank);
+    for (int kept_modes : {3, 6}) {
+        CAPTURE(kept_modes);
         MemorySink hard(noisy.size), optimal(noisy.size);
-        Settings settings = plain(rank);
+        Settings settings = plain(kept_modes);
         run_denoise(noisy, hard, settings, Progress::silent());
         settings.optimal_shrinkage = true;
         Report report = run_denoise(noisy, optimal, settings, Progress::silent());
         const double hard_error = mean_square(hard.rebuilt, clean.frames);
         const double optimal_error = mean_square(optimal.rebuilt, clean.frames);
-        MESSAGE("rank " << rank << ": MSE hard " << hard_error << ", optimal " << optimal_error
-                        << ", noise sigma " << report.rank.noise_sigma << " (true 0.3)");
-        CHECK(report.rank.noise_sigma == doctest::Approx(0.3).epsilon(0.1));
-        REQUIRE(report.shrinkage.size() == static_cast<size_t>(rank));
+        MESSAGE("rank " << kept_modes << ": MSE hard " << hard_error << ", optimal " << optimal_error
+                        << ", noise sigma " << report.rank_decision.noise_sigma << " (true 0.3)");
+        CHECK(report.rank_decision.noise_sigma == doctest::Approx(0.3).epsilon(0.1));
+        REQUIRE(report.shrinkage.size() == static_cast<size_t>(kept_modes));
         CHECK(report.shrinkage[0] > 0.95);
-        for (int j = 3; j < rank; ++j) // pure-noise modes are dropped
+        for (int j = 3; j < kept_modes; ++j) // pure-noise modes are dropped
             CHECK(report.shrinkage[j] == 0.0);
         CHECK(optimal_error <= hard_error);
     }

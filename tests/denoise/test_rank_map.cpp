@@ -76,16 +76,16 @@ struct Result {
     RankSink sink;
 };
 
-Result run(const MemoryShot& shot, bool rank_map, int fixed_rank = 0, std::int64_t memory = std::int64_t(1) << 30,
-           int threads = 2)
+Result run(const MemoryShot& shot, bool rank_map, int fixed_modes = 0,
+           std::int64_t memory = std::int64_t(1) << 30, int threads = 2)
 {
     Settings settings;
     settings.mode_filter.enabled = true;
     settings.rank_map.enabled = rank_map;
     settings.max_memory_bytes = memory;
-    if (fixed_rank > 0) {
-        settings.rank.rule = lowrank::RankRule::Fixed;
-        settings.rank.fixed_rank = fixed_rank;
+    if (fixed_modes > 0) {
+        settings.rank_rule.rule = lowrank::RankRule::Fixed;
+        settings.rank_rule.fixed_modes = fixed_modes;
     }
     Result result{Report{}, RankSink(shot.size)};
     MemoryShot copy = shot;

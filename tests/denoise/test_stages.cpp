@@ -158,7 +158,7 @@ bool check_same_bits(MemoryShot& shot, const Settings& settings)
     CHECK(whole.report.outliers.non_finite == 1);
     CHECK(staged.report.outliers.fireflies == whole.report.outliers.fireflies);
     CHECK(staged.report.outliers.non_finite == 1);
-    CHECK(staged.report.rank.rank == whole.report.rank.rank);
+    CHECK(staged.report.rank_decision.kept_modes == whole.report.rank_decision.kept_modes);
     CHECK(staged.sink.rebuilt == whole.sink.rebuilt);
     CHECK(staged.sink.sigma == whole.sink.sigma);
     CHECK(three.sink.rebuilt == whole.sink.rebuilt);
@@ -191,8 +191,8 @@ TEST_CASE("stages: optimal shrinkage and clamped non-negative outputs, staged, g
     Settings settings;
     settings.mode_filter.enabled = false;
     settings.optimal_shrinkage = true;
-    settings.rank.rule = lowrank::RankRule::Fixed;
-    settings.rank.fixed_rank = 4;
+    settings.rank_rule.rule = lowrank::RankRule::Fixed;
+    settings.rank_rule.fixed_modes = 4;
     settings.non_negative = NonNegativeMode::Clamp;
     check_same_bits(shot, settings);
 }

@@ -177,8 +177,8 @@ TEST_CASE("weight smoothing through the engine: less flicker against the truth, 
     Settings settings;
     settings.outliers.fireflies = false;
     settings.mode_filter.enabled = false;
-    settings.rank.rule = lowrank::RankRule::Fixed;
-    settings.rank.fixed_rank = 5;  // 3 modes of noise: their weights are pure noise
+    settings.rank_rule.rule = lowrank::RankRule::Fixed;
+    settings.rank_rule.fixed_modes = 5; // 3 modes of noise: their weights are pure noise
     MemorySink plain(shot.size), smoothed(shot.size);
     run_denoise(shot, plain, settings, Progress::silent());
     settings.weight_smoothing.enabled = true;

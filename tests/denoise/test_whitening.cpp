@@ -54,13 +54,13 @@ MemoryShot half_noisy_shot(bool with_noise, unsigned seed, int height = kHeight)
     return shot;
 }
 
-Settings fixed(int rank)
+Settings fixed(int kept_modes)
 {
     Settings settings;
     settings.outliers.fireflies = false;
     settings.mode_filter.enabled = false;
-    settings.rank.rule = lowrank::RankRule::Fixed;
-    settings.rank.fixed_rank = rank;
+    settings.rank_rule.rule = lowrank::RankRule::Fixed;
+    settings.rank_rule.fixed_modes = kept_modes;
     return settings;
 }
 
@@ -130,11 +130,11 @@ TEST_CASE("whitening: weights are 1/sigma of the variance layer, and a noise-fre
 TEST_CASE("whitening: the weak mode of a quiet region hidden by a noisy region's noise is kept")
 {
     MemoryShot shot = half_noisy_shot(true, 9);
-    for (int rank : {3, 4}) {
-        CAPTURE(rank);
-        const double plain = quiet_error(rebuild_shot(shot, false, fixed(rank)));
-        const double whitened = quiet_error(rebuild_shot(shot, true, fixed(rank)));
-        MESSAGE("rank " << rank << ": quiet-half MSE plain " << plain << ", whitened " << whitened
+    for (int kept_modes : {3, 4}) {
+        CAPTURE(kept_modes);
+        const double plain = quiet_error(rebuild_shot(shot, false, fixed(kept_modes)));
+        const double whitened = quiet_error(rebuild_shot(shot, true, fixed(kept_modes)));
+        MESSAGE("rank " << kept_modes << ": quiet-half MSE plain " << plain << ", whitened " << whitened
                         << " (its noise variance " << kQuiet * kQuiet << ")");
         CHECK(whitened < plain / 4);
         CHECK(whitened < kQuiet * kQuiet);  // below the input's own noise

@@ -413,10 +413,10 @@ TEST_CASE("denoise --rank-map: one 'rank' channel, never below N, summarised in 
     const int largest = summary["largest_rank"].get<int>();
     CHECK(largest >= 2);
     double sum = 0;
-    for (float rank : ranks) {
-        CHECK(rank >= 2.0f);
-        CHECK(rank <= static_cast<float>(largest));
-        sum += rank;
+    for (float kept_modes : ranks) {
+        CHECK(kept_modes >= 2.0f);
+        CHECK(kept_modes <= static_cast<float>(largest));
+        sum += kept_modes;
     }
     CHECK(summary["mean"].get<double>() == doctest::Approx(sum / ranks.size()).epsilon(1e-5));
     CHECK(summary["file"] == dir.file("rank.exr"));

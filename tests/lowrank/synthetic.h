@@ -38,9 +38,9 @@ struct FrameMatrix {
 /// phase, mode 0 close to constant, each scaled by `amplitudes[j]`.
 inline Eigen::MatrixXd smooth_temporal(int frames, const std::vector<double>& amplitudes)
 {
-    const int rank = static_cast<int>(amplitudes.size());
-    Eigen::MatrixXd temporal(frames, rank);
-    for (int j = 0; j < rank; ++j)
+    const int kept_modes = static_cast<int>(amplitudes.size());
+    Eigen::MatrixXd temporal(frames, kept_modes);
+    for (int j = 0; j < kept_modes; ++j)
         for (int t = 0; t < frames; ++t) {
             const double phase = 6.283185307179586 * (j * t / double(frames) + 0.17 * j);
             temporal(t, j) =
@@ -54,8 +54,8 @@ inline Eigen::MatrixXd smooth_temporal(int frames, const std::vector<double>& am
 inline FrameMatrix low_rank_matrix(std::int64_t rows, int frames, const std::vector<double>& amplitudes,
                                    std::uint64_t seed)
 {
-    const int rank = static_cast<int>(amplitudes.size());
-    const Eigen::MatrixXd spatial = gaussian_matrix(static_cast<int>(rows), rank, seed);
+    const int kept_modes = static_cast<int>(amplitudes.size());
+    const Eigen::MatrixXd spatial = gaussian_matrix(static_cast<int>(rows), kept_modes, seed);
     const Eigen::MatrixXd temporal = smooth_temporal(frames, amplitudes);
     FrameMatrix matrix(rows, frames);
     for (int t = 0; t < frames; ++t)

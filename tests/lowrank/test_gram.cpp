@@ -23,10 +23,10 @@ Basis gram_basis(const FrameMatrix& matrix, std::int64_t band_rows)
     return basis_from_gram(accumulator);
 }
 
-FrameMatrix rebuild(const FrameMatrix& matrix, const Basis& basis, int rank)
+FrameMatrix rebuild(const FrameMatrix& matrix, const Basis& basis, int kept_modes)
 {
     FrameMatrix out(matrix.rows, matrix.frames);
-    project_band(matrix.view(), basis.temporal.leftCols(rank), out.mutable_view());
+    project_band(matrix.view(), basis.temporal.leftCols(kept_modes), out.mutable_view());
     return out;
 }
 

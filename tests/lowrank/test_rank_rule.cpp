@@ -18,9 +18,9 @@ namespace {
 
 const std::vector<double> kAmplitudes = {3.0, 2.0, 1.5, 1.0, 0.7};
 
-std::vector<double> amplitudes_for(int rank)
+std::vector<double> amplitudes_for(int kept_modes)
 {
-    return std::vector<double>(kAmplitudes.begin(), kAmplitudes.begin() + rank);
+    return std::vector<double>(kAmplitudes.begin(), kAmplitudes.begin() + kept_modes);
 }
 
 Basis basis_of(const FrameMatrix& matrix)
@@ -60,19 +60,19 @@ Basis diagonal_basis(const std::vector<double>& energies)
 
 TEST_CASE("press picks the true rank on low-rank + Gaussian noise")
 {
-    for (int rank : {2, 3, 5})
+    for (int kept_modes : {2, 3, 5})
         for (double noise : {0.05, 0.3, 0.8}) {
-            FrameMatrix noisy = low_rank_matrix(20000, 24, amplitudes_for(rank), 100 + rank);
-            add_gaussian_noise(noisy, noise, 200 + rank);
+            FrameMatrix noisy = low_rank_matrix(20000, 24, amplitudes_for(kept_modes), 100 + kept_modes);
+            add_gaussian_noise(noisy, noise, 200 + kept_modes);
             const Basis basis = basis_of(noisy);
             const RankDecision decision = rank_by_press(basis);
             // Without the half Grams (as from the randomized SVD) press is not cross-fitted.
             Basis plain = basis;
             plain.half_gram = {};
-            CHECK(rank_by_press(plain).rank == rank);
-            MESSAGE("rank " << rank << ", noise " << noise << ": press chose " << decision.rank << " ("
-                            << decision.reasoning << ")");
-            CHECK(decision.rank == rank);
+            CHECK(rank_by_press(plain).kept_modes == kept_modes);
+            MESSAGE("rank " << kept_modes << ", noise " << noise << ": press chose " << decision.kept_modes
+                            << " (" << decision.reasoning << ")");
+            CHECK(decision.kept_modes == kept_modes);
             CHECK(decision.rule == "press");
             CHECK(decision.score.size() == 23); // N = 0..F-2
             CHECK(decision.score[0] == doctest::Approx(1.0));
@@ -82,17 +82,17 @@ TEST_CASE("press picks the true rank on low-rank + Gaussian noise")
 
 TEST_CASE("press keeps at most true rank + 1 under heavy-tailed noise")
 {
-    for (int rank : {2, 3, 5}) {
-        FrameMatrix noisy = low_rank_matrix(20000, 24, amplitudes_for(rank), 300 + rank);
-        add_gaussian_noise(noisy, 0.3, 400 + rank);
-        add_spikes(noisy, 1e-3, 50 * 0.3, 500 + rank);
+    for (int kept_modes : {2, 3, 5}) {
+        FrameMatrix noisy = low_rank_matrix(20000, 24, amplitudes_for(kept_modes), 300 + kept_modes);
+        add_gaussian_noise(noisy, 0.3, 400 + kept_modes);
+        add_spikes(noisy, 1e-3, 50 * 0.3, 500 + kept_modes);
         const Basis basis = basis_of(noisy);
         const RankDecision press = rank_by_press(basis);
         const RankDecision floor = rank_by_noise_floor(basis, basis.rows);
-        MESSAGE("rank " << rank << " + 50x spikes: press chose " << press.rank << ", noise-floor chose "
-                        << floor.rank);
-        CHECK(press.rank >= rank);
-        CHECK(press.rank <= rank + 1);
+        MESSAGE("rank " << kept_modes << " + 50x spikes: press chose " << press.kept_modes
+                        << ", noise-floor chose " << floor.kept_modes);
+        CHECK(press.kept_modes >= kept_modes);
+        CHECK(press.kept_modes <= kept_modes + 1);
     }
 }
 
@@ -101,10 +101,10 @@ TEST_CASE("cross-fitted press keeps the true rank when a few pixels are far nois
     // 0.1 % of the pixels carry 100× the noise (caustic paths, firefly-prone pixels):
     // the noise energy sits in few rows, which the plain PRESS and the Gavish–Donoho
     // threshold both take for structure.
-    for (int rank : {2, 3, 5}) {
-        FrameMatrix noisy = low_rank_matrix(20000, 24, amplitudes_for(rank), 300 + rank);
-        const Eigen::MatrixXd noise = gaussian_matrix(20000, 24, 400 + rank);
-        std::mt19937_64 engine(500 + rank);
+    for (int kept_modes : {2, 3, 5}) {
+        FrameMatrix noisy = low_rank_matrix(20000, 24, amplitudes_for(kept_modes), 300 + kept_modes);
+        const Eigen::MatrixXd noise = gaussian_matrix(20000, 24, 400 + kept_modes);
+        std::mt19937_64 engine(500 + kept_modes);
         for (std::int64_t i = 0; i < noisy.rows; ++i) {
             const double deviation = engine() % 1000 == 0 ? 30.0 : 0.3;
             for (int t = 0; t < 24; ++t)
@@ -113,14 +113,14 @@ TEST_CASE("cross-fitted press keeps the true rank when a few pixels are far nois
         const Basis basis = basis_of(noisy);
         Basis plain = basis;
         plain.half_gram = {};
-        const int cross_fitted = rank_by_press(basis).rank;
-        const int not_cross_fitted = rank_by_press(plain).rank;
-        const int noise_floor = rank_by_noise_floor(basis, basis.rows).rank;
-        MESSAGE("rank " << rank << " + noisy pixels: press chose " << cross_fitted << ", plain press "
+        const int cross_fitted = rank_by_press(basis).kept_modes;
+        const int not_cross_fitted = rank_by_press(plain).kept_modes;
+        const int noise_floor = rank_by_noise_floor(basis, basis.rows).kept_modes;
+        MESSAGE("rank " << kept_modes << " + noisy pixels: press chose " << cross_fitted << ", plain press "
                         << not_cross_fitted << ", noise-floor " << noise_floor);
-        CHECK(cross_fitted >= rank);
-        CHECK(cross_fitted <= rank + 1);
-        CHECK(not_cross_fitted > rank + 1); // the case is hard: proves the test discriminates
+        CHECK(cross_fitted >= kept_modes);
+        CHECK(cross_fitted <= kept_modes + 1);
+        CHECK(not_cross_fitted > kept_modes + 1); // the case is hard: proves the test discriminates
     }
 }
 
@@ -149,9 +149,9 @@ TEST_CASE("a mode living on one frame is penalised by press")
     const Basis basis = basis_of(noisy);
     CHECK(leverages(basis, 3)(7) > 0.99);
     const RankDecision decision = rank_by_press(basis);
-    MESSAGE("firefly frame: press chose " << decision.rank << ", variance rule "
-                                          << rank_by_variance(basis).rank);
-    CHECK(decision.rank == 2);
+    MESSAGE("firefly frame: press chose " << decision.kept_modes << ", variance rule "
+                                          << rank_by_variance(basis).kept_modes);
+    CHECK(decision.kept_modes == 2);
 }
 
 TEST_CASE("variance rule reproduces a hand-computed example")
@@ -162,29 +162,29 @@ TEST_CASE("variance rule reproduces a hand-computed example")
     CHECK(by_default.score[3] == doctest::Approx(0.08));
     CHECK(by_default.score[5] == doctest::Approx(0.015));
     // u(4) = .04 ≤ .05 but the step to 5 is .025 > .01; u(5) = .015 and the step is .009.
-    CHECK(by_default.rank == 5);
-    CHECK(rank_by_variance(basis, 0.05, 0.03).rank == 4);
-    CHECK(rank_by_variance(basis, 0.10, 0.05).rank == 3);
+    CHECK(by_default.kept_modes == 5);
+    CHECK(rank_by_variance(basis, 0.05, 0.03).kept_modes == 4);
+    CHECK(rank_by_variance(basis, 0.10, 0.05).kept_modes == 3);
     // Nothing qualifies: keep every mode below F.
-    CHECK(rank_by_variance(basis, 0.001, 0.0001).rank == 7);
+    CHECK(rank_by_variance(basis, 0.001, 0.0001).kept_modes == 7);
     RankRuleOptions options;
     options.rule = RankRule::Variance;
-    CHECK(choose_rank(basis, options).rank == 5);
+    CHECK(choose_rank(basis, options).kept_modes == 5);
 }
 
 TEST_CASE("noise-floor finds the rank of low-rank + white noise")
 {
-    for (int rank : {2, 3, 5}) {
-        FrameMatrix noisy = low_rank_matrix(20000, 40, amplitudes_for(rank), 700 + rank);
-        add_gaussian_noise(noisy, 0.5, 800 + rank);
+    for (int kept_modes : {2, 3, 5}) {
+        FrameMatrix noisy = low_rank_matrix(20000, 40, amplitudes_for(kept_modes), 700 + kept_modes);
+        add_gaussian_noise(noisy, 0.5, 800 + kept_modes);
         const Basis basis = basis_of(noisy);
         const RankDecision decision = rank_by_noise_floor(basis, basis.rows);
-        MESSAGE("noise-floor: rank " << rank << " chose " << decision.rank << ", noise sigma "
+        MESSAGE("noise-floor: rank " << kept_modes << " chose " << decision.kept_modes << ", noise sigma "
                                      << decision.noise_sigma << " (true 0.5)");
-        CHECK(decision.rank == rank);
+        CHECK(decision.kept_modes == kept_modes);
         CHECK(decision.noise_sigma == doctest::Approx(0.5).epsilon(0.03));
-        CHECK(basis.singular_values(rank - 1) > decision.noise_floor);
-        CHECK(basis.singular_values(rank) < decision.noise_floor);
+        CHECK(basis.singular_values(kept_modes - 1) > decision.noise_floor);
+        CHECK(basis.singular_values(kept_modes) < decision.noise_floor);
     }
     // Pure white noise: nothing above the floor (the rule still returns 1).
     FrameMatrix noise_only(20000, 40);
@@ -192,7 +192,7 @@ TEST_CASE("noise-floor finds the rank of low-rank + white noise")
     const Basis basis = basis_of(noise_only);
     const RankDecision decision = rank_by_noise_floor(basis, basis.rows);
     CHECK(basis.singular_values(0) < decision.noise_floor);
-    CHECK(decision.rank == 1);
+    CHECK(decision.kept_modes == 1);
 }
 
 TEST_CASE("Marchenko-Pastur median agrees with Gavish-Donoho's omega")
@@ -214,8 +214,8 @@ TEST_CASE("Marchenko-Pastur median agrees with Gavish-Donoho's omega")
 TEST_CASE("fixed rank is validated")
 {
     const Basis basis = diagonal_basis({50, 30, 12, 4, 2.5, 0.9, 0.4, 0.2});
-    CHECK(rank_fixed(basis, 3).rank == 3);
-    CHECK(rank_fixed(basis, 7).rank == 7);
+    CHECK(rank_fixed(basis, 3).kept_modes == 3);
+    CHECK(rank_fixed(basis, 7).kept_modes == 7);
     for (int bad : {0, -1, 8, 100}) {
         try {
             rank_fixed(basis, bad);

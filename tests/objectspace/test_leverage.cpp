@@ -16,14 +16,14 @@ TEST_CASE("leverage: the diagonal of the projection on the kept modes, summing t
     const Eigen::MatrixXd data = Eigen::MatrixXd::Random(200, frames);
     const Eigen::JacobiSVD<Eigen::MatrixXd> svd(data, Eigen::ComputeThinV);
     const Eigen::MatrixXd& v = svd.matrixV();
-    for (int rank : {1, 2, 5, frames}) {
-        std::vector<std::vector<double>> modes(static_cast<std::size_t>(rank));
-        for (int j = 0; j < rank; ++j)
+    for (int kept_modes : {1, 2, 5, frames}) {
+        std::vector<std::vector<double>> modes(static_cast<std::size_t>(kept_modes));
+        for (int j = 0; j < kept_modes; ++j)
             for (int t = 0; t < frames; ++t)
                 modes[j].push_back(v(t, j));
         const std::vector<double> leverages = objectspace::frame_leverages(modes, frames);
         REQUIRE(leverages.size() == static_cast<std::size_t>(frames));
-        const Eigen::MatrixXd projection = v.leftCols(rank) * v.leftCols(rank).transpose();
+        const Eigen::MatrixXd projection = v.leftCols(kept_modes) * v.leftCols(kept_modes).transpose();
         double sum = 0;
         for (int t = 0; t < frames; ++t) {
             CHECK(leverages[t] >= 0);
@@ -31,7 +31,7 @@ TEST_CASE("leverage: the diagonal of the projection on the kept modes, summing t
             CHECK(leverages[t] == doctest::Approx(projection(t, t)).epsilon(1e-12));
             sum += leverages[t];
         }
-        CHECK(sum == doctest::Approx(rank).epsilon(1e-12));
+        CHECK(sum == doctest::Approx(kept_modes).epsilon(1e-12));
     }
 }
 

@@ -97,12 +97,12 @@ TEST_CASE("point denoise: rank-2 points are recovered, left unfiltered, and thei
 {
     PointShot shot = make_point_shot(0.0);
     denoise::Settings settings;
-    settings.rank.rule = lowrank::RankRule::Fixed;
-    settings.rank.fixed_rank = 2;
+    settings.rank_rule.rule = lowrank::RankRule::Fixed;
+    settings.rank_rule.fixed_modes = 2;
     objectspace::PointDenoise result =
         objectspace::denoise_points(shot.shot, settings, shot.samples, filter_options(), Progress::silent());
     CHECK(result.over_surfaces);
-    CHECK(result.report.rank.rank == 2);
+    CHECK(result.report.rank_decision.kept_modes == 2);
     CHECK(result.filter.width == 0);
     CHECK(rms_error(shot, result.points) < 1e-5);
     double largest_sigma = 0;
@@ -126,9 +126,9 @@ TEST_CASE("point denoise: with noise the surface filter lowers the temporal rebu
     objectspace::PointDenoise temporal =
         objectspace::denoise_points(shot.shot, denoise::Settings{}, shot.samples, off, Progress::silent());
     const double error = rms_error(shot, filtered.points), temporal_error = rms_error(shot, temporal.points);
-    MESSAGE("N = " << filtered.report.rank.rank << ", RMS error: noise 0.1, temporal " << temporal_error
-                   << ", filtered " << error << " (" << filtered.filter.reasoning << ")");
-    CHECK(filtered.report.rank.rank == 2);
+    MESSAGE("N = " << filtered.report.rank_decision.kept_modes << ", RMS error: noise 0.1, temporal "
+                   << temporal_error << ", filtered " << error << " (" << filtered.filter.reasoning << ")");
+    CHECK(filtered.report.rank_decision.kept_modes == 2);
     CHECK(temporal_error < 0.1 * std::sqrt(3.0 / kFrames)); // about N/F of the noise variance is kept
     CHECK(filtered.filter.width > 0);
     CHECK(error < 0.6 * temporal_error);

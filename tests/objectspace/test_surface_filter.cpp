@@ -91,7 +91,7 @@ objectspace::SurfaceFilterChoice filter(Corner& corner, bool filter_on = true)
     objectspace::SurfaceFilterOptions options;
     options.widths = {0.75, 1.0, 1.5, 2.0, 3.0};
     options.filter = filter_on;
-    options.rank = 1;
+    options.kept_modes = 1;
     return objectspace::filter_surfaces(corner.samples, options, 1, frames);
 }
 

@@ -113,8 +113,8 @@ TEST_CASE("coefficient images and the engine's preview modes rebuild an exactly 
     options.preview_width = width;  // no downsampling: the rebuild must be exact
     Collector collector(source, sink, options);
     denoise::Settings settings;
-    settings.rank.rule = lowrank::RankRule::Fixed;
-    settings.rank.fixed_rank = 2;
+    settings.rank_rule.rule = lowrank::RankRule::Fixed;
+    settings.rank_rule.fixed_modes = 2;
     settings.mode_filter.enabled = false;
     settings.report_modes = 8;
     denoise::Report report = denoise::run_denoise(collector.source(), collector.sink(), settings, Progress::silent());

@@ -35,10 +35,10 @@ ReportData sample_data()
     segment.first = 0;
     segment.count = 6;
     segment.singular_values = {10, 3, 0.5, 0.4, 0.3};
-    segment.rank.rank = 2;
-    segment.rank.rule = "press";
-    segment.rank.reasoning = "PRESS is lowest at N = 2.";
-    segment.rank.noise_floor = 0.6;
+    segment.rank_decision.kept_modes = 2;
+    segment.rank_decision.rule = "press";
+    segment.rank_decision.reasoning = "PRESS is lowest at N = 2.";
+    segment.rank_decision.noise_floor = 0.6;
     for (int j = 0; j < 4; ++j) {
         segment.temporal_modes.push_back({0.1 * j, 0.2, 0.3, 0.4, 0.5, 0.6});
         segment.coefficient_images.push_back(ramp(8, 4, 1.0f + j));

@@ -61,16 +61,16 @@ TEST_CASE("denoise --report writes one self-contained page with the slider's mod
     CHECK(html.find("https://") == std::string::npos);
     nlohmann::json page = page_data(html);
     nlohmann::json summary = nlohmann::json::parse(read_text(dir.file("d.json")));
-    int rank = summary["rank"]["n"];
+    int kept_modes = summary["rank"]["n"];
     REQUIRE(page["segments"].size() == 1);
-    CHECK(page["segments"][0]["rank"] == rank);
-    CHECK(page["segments"][0]["modes"].size() == std::min(std::max(2 * rank, 8), 19));
+    CHECK(page["segments"][0]["rank"] == kept_modes);
+    CHECK(page["segments"][0]["modes"].size() == std::min(std::max(2 * kept_modes, 8), 19));
     CHECK(page["frames"].size() == 3);
     for (const auto& frame : page["frames"])
         CHECK(frame["panels"].size() == 3);
     CHECK(html.find(summary["rank"]["reasoning"].get<std::string>().substr(0, 20)) != std::string::npos);
     // Without --report nothing else changes: the JSON's kept temporal modes are N.
-    CHECK(summary["temporal_modes"].size() == static_cast<size_t>(rank));
+    CHECK(summary["temporal_modes"].size() == static_cast<size_t>(kept_modes));
 }
 
 TEST_CASE("denoise --report with --segments shows each part and marks the cut")
@@ -85,8 +85,9 @@ TEST_CASE("denoise --report with --segments shows each part and marks the cut")
     REQUIRE(page["segments"].size() == 2);
     CHECK(page["segments"][1]["first"] == 10);
     CHECK(page["segments"][1]["count"] == 10);
-    const int rank = page["segments"][1]["rank"];
-    CHECK(page["segments"][1]["modes"].size() == std::min(std::max(2 * rank, 8), 9));  // at most F − 1 of the part
+    const int kept_modes = page["segments"][1]["rank"];
+    CHECK(page["segments"][1]["modes"].size() ==
+          std::min(std::max(2 * kept_modes, 8), 9)); // at most F − 1 of the part
     CHECK(html.find(">cut<") != std::string::npos);
 }
 
