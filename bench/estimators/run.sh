@@ -1,0 +1,28 @@
+#!/usr/bin/env bash
+# Runs the estimator-choice prototype (prototype.py, issue 29) on the two Cycles
+# shots: denoises DiffDir and DiffInd with today's defaults, then scores the
+# noisy input, a 1.5 px Gaussian, the rebuild and the per-pixel choice against the
+# 1024/512-spp references. Not a test. ~3 min on 2 cores.
+#
+#   bench/estimators/run.sh MODESTACK [WORK]     (CYCLES_DIR: default ../shared/cycles)
+# Needs /usr/bin/python3 with Debian's python3-numpy and python3-openimageio.
+set -euo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+modestack=${1:?usage: run.sh MODESTACK [WORK]}
+work=${2:-/tmp/modestack-estimators}
+cycles=${CYCLES_DIR:-$here/../../../shared/cycles}
+mkdir -p "$work"
+# The rebuild's kept noise h per layer: the median of (rebuild - reference)^2 / v
+# on these shots (the engine has the exact per-pixel value; see prototype.py).
+declare -A kept=([DiffDir]=0.1 [DiffInd]=0.008)
+for shot in sweep_room spin_room; do
+    for layer in DiffDir DiffInd; do
+        out=$work/$shot-$layer
+        [ -f "$out/frame.0048.exr" ] ||
+            "$modestack" denoise "$cycles/$shot/spp4/frame.####.exr" -o "$out/frame.####.exr" --layer "$layer" \
+                --json "$out.json" > "$out.log" 2>&1 || { cat "$out.log"; exit 1; }
+        echo "== $shot $layer"
+        /usr/bin/python3 "$here/prototype.py" "$cycles/$shot/spp4/frame.*.exr" "$out/frame.*.exr" \
+            "$cycles/$shot/ref/frame.*.exr" "ViewLayer.$layer" --kept-noise "${kept[$layer]}"
+    done
+done
