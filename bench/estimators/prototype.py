@@ -98,11 +98,24 @@ def rel(x, ref):
     return (x - ref) ** 2 / (ref ** 2 + 0.01)
 
 
-def scores(name, x, sigma, ref, noisy):
+def transient_mask(ref, first, last):
+    """Pixels of frames first..last (1-based) whose reference differs from its
+    temporal median by more than 10 % (+ 0.01): where content changes."""
+    median = np.median(ref, axis=0, keepdims=True)
+    changed = (np.abs(ref - median) > 0.1 * np.abs(median) + 0.01).any(axis=3, keepdims=True)
+    frames = np.zeros((ref.shape[0], 1, 1, 1), dtype=bool)
+    frames[first - 1:last] = True
+    return np.broadcast_to(changed & frames, ref.shape)
+
+
+def scores(name, x, sigma, ref, noisy, transient):
     e = x - ref
     per_frame = rel(x, ref).mean((1, 2, 3)) / rel(noisy, ref).mean((1, 2, 3))
     line = (f"{name:8s} relMSE {rel(x, ref).mean():.4f} = {rel(x, ref).mean() / rel(noisy, ref).mean():.2f}x noisy, "
             f"worst frame {per_frame.max():.2f}x")
+    if transient is not None:
+        line += f", transient {rel(x, ref)[transient].mean():.4f} = " \
+                f"{rel(x, ref)[transient].mean() / rel(noisy, ref)[transient].mean():.2f}x"
     if sigma is not None:
         ratio = np.abs(e) / np.maximum(sigma, 1e-12)
         top = np.abs(e).ravel() >= np.quantile(np.abs(e), 0.99)
@@ -121,6 +134,7 @@ def main():
     parser.add_argument('--radius', type=int, default=3, help='risk window radius (3: 7x7)')
     parser.add_argument('--clamp', type=float, default=4.0, help='firefly clamp: 3x3 median + this many noise sd')
     parser.add_argument('--kept-noise', type=float, required=True, help="the rebuild's kept noise h (see above)")
+    parser.add_argument('--transient', help='FIRST-LAST: frames whose changing pixels are scored apart')
     args = parser.parse_args()
     y = read_shot(args.noisy, args.layer)
     ref = read_shot(args.reference, args.layer)
@@ -164,12 +178,15 @@ def main():
     sigma = np.sqrt(np.maximum(np.take_along_axis(np.stack([risk(k) for k in names]), choice[None], 0)[0], 0))
     sigma = sigma * np.ones(y.shape)
     print(f"{args.layer}: " + ', '.join(f"{k} {(choice == i).mean() * 100:.0f} %" for i, k in enumerate(names)))
-    print('  ' + scores('noisy', y, None, ref, y))
-    print('  ' + scores('clamped', clamped, None, ref, y))
+    transient = None
+    if args.transient:
+        first, last = (int(f) for f in args.transient.split('-'))
+        transient = transient_mask(ref, first, last)
+        print(f"  transient region: {transient[..., 0].sum()} pixels of frames {first}-{last}")
     g15, _, _ = gauss(y, 1.5)
-    print('  ' + scores('gauss1.5', g15, None, ref, y))
-    print('  ' + scores('rebuild', rebuild, engine_sigma, ref, y))
-    print('  ' + scores('chosen', out, sigma, ref, y))
+    for name, x, s in [('noisy', y, None), ('clamped', clamped, None), ('gauss1.5', g15, None),
+                       ('rebuild', rebuild, engine_sigma), ('chosen', out, sigma)]:
+        print('  ' + scores(name, x, s, ref, y, transient))
 
 
 if __name__ == '__main__':
