@@ -5,6 +5,7 @@
 #include "io/sequence.h"
 
 #include <algorithm>
+#include <cmath>
 
 #include <fmt/format.h>
 
@@ -46,6 +47,13 @@ void add_method_options(CLI::App& command, MethodOptions& options)
         "Weight every pixel by 1/sqrt(its mean noise variance) before the SVD and back after, so that "
         "bright noisy regions do not take the modes: auto (the default: when the input has a variance layer "
         "<layer>Var, e.g. DiffIndVar), on, off");
+    command.add_option(
+        "--estimators", options.estimators,
+        "Estimators each pixel may take, comma-separated: rebuild (the default, alone: the temporal rebuild "
+        "everywhere), input (the cleaned input), spatial (Gaussian blurs of the input, 1 and 2 px). The "
+        "rebuild "
+        "is kept unless another's risk (SURE, 7x7) is lower by 2 standard errors; sigma is then the chosen "
+        "value's estimated error. Not with --stage or --rank-map yet");
 }
 
 void apply_training_frames(const MethodOptions& options, const std::vector<int>& frame_numbers,
@@ -126,6 +134,10 @@ denoise::Transform apply_method_options(const MethodOptions& options, denoise::S
     if (settings.optimal_shrinkage && settings.mode_filter.enabled)
         throw usage_error(
             "--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
+    settings.estimators = denoise::parse_estimators(options.estimators);
+    if (settings.estimators.enabled() && settings.rank_map.enabled)
+        throw usage_error(
+            "--estimators cannot be combined with --rank-map yet: the map is of the rebuild alone");
     return transform;
 }
 
@@ -171,6 +183,41 @@ std::vector<double> smoothing_widths(const denoise::Report& report)
     return widths;
 }
 std::string settings_whiten_mode(const TransformStream& stream) { return stream.whitening() ? "on" : "off"; }
+
+// Per frame: the share of pixels each estimator won and the RMS of its estimated
+// error over them (sigma's own estimate).
+nlohmann::ordered_json estimators_json(const denoise::EstimatorOptions& options,
+                                       const denoise::Report& report, const std::vector<int>& frame_numbers)
+{
+    nlohmann::ordered_json names = nlohmann::ordered_json::array({"rebuild"});
+    if (options.input)
+        names.push_back("input");
+    if (options.spatial)
+        names.push_back("spatial");
+    nlohmann::ordered_json json{
+        {"set", names}, {"significance", options.significance}, {"radius", options.radius}};
+    nlohmann::ordered_json frames = nlohmann::ordered_json::array();
+    const int channels = std::max(report.shape.channels, 1);
+    for (size_t t = 0; t < report.estimator_choice.size(); ++t) {
+        const denoise::ChoiceCounts& counts = report.estimator_choice[t];
+        std::int64_t pixels = 0;
+        for (std::int64_t count : counts.pixels)
+            pixels += count;
+        nlohmann::ordered_json shares, errors;
+        for (int k = 0; k < denoise::kEstimators; ++k) {
+            const std::string name = denoise::estimator_name(static_cast<denoise::Estimator>(k));
+            const std::int64_t won = counts.pixels[static_cast<size_t>(k)];
+            shares[name] = pixels > 0 ? static_cast<double>(won) / static_cast<double>(pixels) : 0.0;
+            errors[name] = won > 0 ? std::sqrt(counts.squared_error[static_cast<size_t>(k)] /
+                                               static_cast<double>(won * channels))
+                                   : 0.0;
+        }
+        frames.push_back(
+            {{"frame", frame_numbers.at(t)}, {"share", shares}, {"estimated_rms_error", errors}});
+    }
+    json["frames"] = frames;
+    return json;
+}
 } // namespace
 
 nlohmann::ordered_json method_json(const TransformStream& stream, const denoise::Settings& settings,
@@ -211,6 +258,7 @@ nlohmann::ordered_json method_json(const TransformStream& stream, const denoise:
                                {"weight_min", whitening->smallest},
                                {"weight_max", whitening->largest}});
     json["weight_smoothing"] = {{"enabled", settings.weight_smoothing.enabled}, {"modes", smoothing}};
+    json["estimators"] = estimators_json(settings.estimators, report, frame_numbers);
     nlohmann::ordered_json parts = nlohmann::ordered_json::array();
     for (size_t k = 0; k < run.reports.size(); ++k) {
         const denoise::FrameSegment& segment = run.segments[k];

@@ -33,6 +33,11 @@ struct PassNeeds {
     /// own buffers exist, so a band needs the larger of the two, not their sum.
     int survey_images = 0;
     std::int64_t source_row_bytes = 0;  ///< what the source keeps per row of a streamed band
+    /// Rows beyond a band that pass 2 rebuilds for the estimator choice
+    /// (estimator_choice.h); > 0 also keeps each frame's sigma apart, since the
+    /// choice reads the band's input rows after sigma, and holds the input rows
+    /// the choice reads as the source gives them (about as many rows again).
+    int choice_rows = 0;
 };
 
 /// The chosen way through a shot.

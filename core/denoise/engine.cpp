@@ -79,6 +79,7 @@ Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& setting
     const RebuildReport rebuilt = rebuild_shot(context, stream, plan, solution, survey, modes);
     report.non_negative = rebuilt.non_negative;
     report.rank_map = rebuilt.rank_map;
+    report.estimator_choice = rebuilt.estimator_choice;
     report.passes = stream.passes();
     report.seconds_rebuild = seconds_since(start);
     return report;

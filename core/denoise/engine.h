@@ -16,6 +16,7 @@
 
 #include "core/common/progress.h"
 #include "core/denoise/band_plan.h"
+#include "core/denoise/estimator_choice.h"
 #include "core/denoise/feature_guide.h"
 #include "core/denoise/frame_stream.h"
 #include "core/denoise/mode_filter.h"
@@ -78,6 +79,9 @@ struct Settings {
     /// --whiten: a weight per sample of the image ([row][x][channel]); the modes come
     /// from the weighted rows, everything else from the rows as read (whitening.h).
     const std::vector<float>* whitening = nullptr;
+    /// --estimators: a per-pixel choice among the rebuild and other estimators
+    /// (estimator_choice.h); none enabled: the rebuild everywhere.
+    EstimatorOptions estimators;
     /// --report: also report pt(t, j) for j < max(2N, report_modes), capped at F − 1
     /// and at the modes found (Report::preview_temporal_modes, the rank slider); 0: none.
     int report_modes = 0;
@@ -102,6 +106,8 @@ struct Report {
     std::vector<double> shrinkage;        ///< per kept mode η(σ_j)/σ_j (empty: hard truncation)
     RankMapSummary rank_map;              ///< the per-pixel ranks (largest_rank 0: no map)
     WeightSmoothingPlan weight_smoothing; ///< what --weight-smoothing did per kept mode
+    /// --estimators: per frame, what each estimator won (empty: no choice made).
+    std::vector<ChoiceCounts> estimator_choice;
     double seconds_filter_survey = 0;     ///< the mode filter's SURE pass
     double seconds_statistics = 0;        ///< pass 1 (read + clean + Gram)
     double seconds_solve = 0;             ///< eigensolve or randomized SVD, and the rank rule

@@ -33,6 +33,8 @@ void check_task(const Settings& settings, Stage stage)
             fmt::format("--stage {}: the farm stages use the gram solver, not --method rsvd", name));
     if (!settings.training_frames.empty())
         throw internal_error(fmt::format("--stage {} cannot be combined with --train-frames", name));
+    if (settings.estimators.enabled())
+        throw internal_error(fmt::format("--stage {} cannot be combined with --estimators yet", name));
     if (stage != Stage::Statistics && stage != Stage::Solve &&
         settings.non_negative == NonNegativeMode::KeepSum)
         throw internal_error(

@@ -96,6 +96,7 @@ RebuildBasis chosen_modes(const Settings& settings, const ShotShape& shape, cons
 struct RebuildReport {
     NonNegativeCounts non_negative;
     RankMapSummary rank_map;
+    std::vector<ChoiceCounts> estimator_choice; ///< per frame (--estimators; empty: none)
 };
 
 /// Pass 2 of a whole run: every frame rebuilt band by band into the sink.

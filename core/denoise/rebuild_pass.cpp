@@ -73,60 +73,110 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
     ScratchBuffer<float> kept_sigma; // sigma_from_mean writes every value
     tbb::enumerable_thread_specific<std::vector<float>> kept_noise_of_worker; // one frame's
     std::vector<float> ranks;
+    // --estimators: rows around each band are rebuilt too, for the choice's windows.
+    const EstimatorOptions& estimators = settings.estimators;
+    const int reach = estimator_rebuilt_reach(estimators);
+    tbb::enumerable_thread_specific<std::pair<std::vector<float>, std::vector<float>>> chosen_of_worker;
+    ScratchBuffer<float> raw; // the input rows the choice reads, as the source gives them
+    const int input_reach = estimator_input_reach(estimators);
+    if (estimators.enabled())
+        report.estimator_choice.assign(static_cast<size_t>(frames), {});
     for (int row = 0; row < shape.height; row += plan.bands.band_rows) {
         const int end = std::min(shape.height, row + plan.bands.band_rows);
         Band& data = stream.band_with_halo(band, row, end, true);
         throw_if_cancelled();
-        const std::int64_t offset = (row - data.row_begin) * row_samples, valid = (end - row) * row_samples;
-        // Sigma of the band's own rows: prepare leaves each frame's windowed
-        // residual mean there (the pass that finds s²), finished frame by frame.
-        // A streamed band's own input rows hold it (nothing reads them after
-        // prepare); a kept shot's must stay, so sigma gets its own buffer.
+        // Rows [first, last) are rebuilt, with their sigma: the band's own, and
+        // the choice's reach around them.
+        const int first = std::max(0, row - reach), last = std::min(shape.height, end + reach);
+        const std::int64_t offset = (first - data.row_begin) * row_samples,
+                           valid = (last - first) * row_samples;
+        // Sigma of the rebuilt rows: prepare leaves each frame's windowed residual
+        // mean there (the pass that finds s²), finished frame by frame. A
+        // streamed band's own input rows hold it (nothing reads them after
+        // prepare); a kept shot's must stay, and so must the input the choice
+        // reads, so sigma then gets its own buffer.
         float* sigma = nullptr;
         std::int64_t sigma_stride = valid;
-        if (kept) {
+        if (kept || estimators.enabled()) {
             kept_sigma.resize(static_cast<size_t>(valid) * frames);
             sigma = kept_sigma.data();
         } else {
             sigma = band.storage.data() + offset;
             sigma_stride = data.stride;
         }
-        rebuilder.prepare(data, row, end, nullptr, rank_map ? &ranks : nullptr, sigma, sigma_stride);
-        // rebuilt() holds the unfiltered rebuild of sigma's rows; the output goes over its valid ones.
-        const auto [residual_begin, residual_end] = rebuilder.sigma_rows(data, row, end);
+        rebuilder.prepare(data, first, last, nullptr, rank_map ? &ranks : nullptr, sigma, sigma_stride);
+        // rebuilt() holds the unfiltered rebuild of sigma's rows; the output goes over its rebuilt ones.
+        const auto [residual_begin, residual_end] = rebuilder.sigma_rows(data, first, last);
         const std::int64_t rebuilt_stride = (residual_end - residual_begin) * row_samples;
         const lowrank::ImageBandShape residual_shape{shape.width, residual_end - residual_begin,
                                                      shape.channels};
-        const int first_valid = row - residual_begin, last_valid = end - residual_begin;
+        const int first_valid = first - residual_begin, last_valid = last - residual_begin;
+        auto kept_noise_of = [&](int t, std::vector<float>& kept_noise) {
+            kept_noise.resize(static_cast<size_t>(valid));
+            rebuilder.kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes, rebuilder.gains().data(),
+                                          valid, kept_noise.data());
+        };
         tbb::parallel_for(0, frames, [&](int t) {
             std::vector<float>& kept_noise = kept_noise_of_worker.local(); // nothing below runs in parallel
-            if (filter) {
-                kept_noise.resize(static_cast<size_t>(valid));
-                rebuilder.kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes,
-                                              rebuilder.gains().data(), valid, kept_noise.data());
-            }
+            if (filter)
+                kept_noise_of(t, kept_noise);
             lowrank::sigma_from_mean(residual_shape, first_valid, last_valid, rebuilder.confidence(),
                                      rebuilder.noise_variance().data(), modes.leverages(t),
                                      filter ? kept_noise.data() : nullptr, sigma + t * sigma_stride);
         });
-        lowrank::MutableBandView output_view{
-            rebuilder.rebuilt().data() + (row - residual_begin) * row_samples, valid, frames, rebuilt_stride};
-        if (output > 0) // the band's own rows from the changed coefficients
+        lowrank::MutableBandView output_view{rebuilder.rebuilt().data() +
+                                                 (first - residual_begin) * row_samples,
+                                             valid, frames, rebuilt_stride};
+        if (output > 0) // the rebuilt rows from the changed coefficients
             lowrank::rebuild_from_coefficients(
                 {rebuilder.coefficients().data() + offset, valid, output, data.rows},
                 modes.temporal.leftCols(output), output_view);
+        // Counted over the band's own rows only (the rows around it belong to other bands).
+        const std::int64_t own_offset = (row - first) * row_samples, own = (end - row) * row_samples;
+        auto rows_of = [&](std::int64_t from, std::int64_t count) {
+            return lowrank::MutableBandView{output_view.data + from, count, frames, output_view.frame_stride};
+        };
+        make_non_negative(rows_of(0, own_offset), settings.non_negative, settings.non_negative_floor);
         report.non_negative +=
-            make_non_negative(output_view, settings.non_negative, settings.non_negative_floor);
+            make_non_negative(rows_of(own_offset, own), settings.non_negative, settings.non_negative_floor);
+        make_non_negative(rows_of(own_offset + own, valid - own_offset - own), settings.non_negative,
+                          settings.non_negative_floor);
 
+        const int raw_begin = std::max(0, row - input_reach),
+                  raw_end = std::min(shape.height, end + input_reach);
+        if (estimators.enabled())
+            stream.read_raw_rows(raw_begin, raw_end, data, raw);
+        const std::int64_t raw_rows = (raw_end - raw_begin) * row_samples;
         tbb::parallel_for(0, frames, [&](int frame) { // a window of the kept shot has no pass-through rows
-            context.sink.write_rows(
-                frame, row, end, output_view.data + frame * output_view.frame_stride,
-                sigma + frame * sigma_stride,
-                data.pass_through.empty() ? nullptr : &data.pass_through[static_cast<size_t>(frame)]);
+            const PassThroughRows* pass_through =
+                data.pass_through.empty() ? nullptr : &data.pass_through[static_cast<size_t>(frame)];
+            const float* frame_sigma = sigma + frame * sigma_stride;
+            const float* frame_output = output_view.data + frame * output_view.frame_stride;
+            if (!estimators.enabled()) {
+                context.sink.write_rows(frame, row, end, frame_output + own_offset, frame_sigma + own_offset,
+                                        pass_through);
+                return;
+            }
+            std::vector<float>& kept_noise = kept_noise_of_worker.local();
+            if (filter)
+                kept_noise_of(frame, kept_noise);
+            ChoiceFrame choice_frame;
+            choice_frame.image = {shape.width, shape.height, shape.channels};
+            choice_frame.input = raw.data() + frame * raw_rows;
+            choice_frame.input_begin = raw_begin, choice_frame.input_end = raw_end;
+            choice_frame.rebuilt = frame_output, choice_frame.sigma = frame_sigma;
+            choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;
+            choice_frame.leverage = modes.leverages(frame);
+            choice_frame.rebuilt_begin = first, choice_frame.rebuilt_end = last;
+            auto& [values, chosen_sigma] = chosen_of_worker.local();
+            values.resize(static_cast<size_t>(own)), chosen_sigma.resize(static_cast<size_t>(own));
+            report.estimator_choice[static_cast<size_t>(frame)].add(
+                choose_estimators(estimators, choice_frame, row, end, values.data(), chosen_sigma.data()));
+            context.sink.write_rows(frame, row, end, values.data(), chosen_sigma.data(), pass_through);
         });
         if (context.sink.wants_modes())
             write_spatial_modes(context.sink, shape, rebuilder.coefficients(), data, solution, kept_modes,
-                                row, end, offset);
+                                row, end, (row - data.row_begin) * row_samples);
         if (rank_map) {
             context.sink.write_rank_rows(row, end, ranks.data());
             report.rank_map.add(ranks);

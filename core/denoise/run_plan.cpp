@@ -43,6 +43,8 @@ void check_settings(const Settings& settings, const ShotShape& shape)
     if (settings.optimal_shrinkage && settings.mode_filter.enabled)
         throw internal_error(
             "--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
+    if (settings.estimators.enabled() && settings.rank_map.enabled)
+        throw internal_error("--estimators and --rank-map do not go together yet");
     if (settings.whitening &&
         settings.whitening->size() != static_cast<size_t>(shape.width) * shape.height * shape.channels)
         throw internal_error("the whitening weights do not match the shot");
@@ -82,6 +84,14 @@ RunPlan plan_run(const PassContext& context, bool with_features)
     }
     // Each worker's residual rows (double) of sigma's windows.
     needs.band_images += 4 * tbb::this_task_arena::max_concurrency();
+    // The estimator choice: more rows rebuilt around each band (and so read), and
+    // each worker's planes of one frame (about 10 images: estimator_choice.cpp).
+    if (settings.estimators.enabled()) {
+        needs.choice_rows = estimator_rebuilt_reach(settings.estimators);
+        needs.halo_rows =
+            std::max(needs.halo_rows + needs.choice_rows, estimator_input_reach(settings.estimators));
+        needs.band_images += 10 * tbb::this_task_arena::max_concurrency();
+    }
     plan.bands = plan_bands(shape, settings.max_memory_bytes, needs);
     plan.solver = settings.solver;
     if (plan.solver == Solver::Auto)

@@ -197,6 +197,8 @@ Report merge_reports(const std::vector<Report>& reports)
         merged.outliers.non_finite += part.outliers.non_finite;
         merged.outliers.fireflies += part.outliers.fireflies;
         merged.non_negative += part.non_negative;
+        merged.estimator_choice.insert(merged.estimator_choice.end(), part.estimator_choice.begin(),
+                                       part.estimator_choice.end());
         merged.seconds_filter_survey += part.seconds_filter_survey;
         merged.seconds_statistics += part.seconds_statistics;
         merged.seconds_solve += part.seconds_solve;

@@ -86,6 +86,11 @@ public:
     /// window into the kept shot, or read into `band` (`with_pass_through`: with
     /// each frame's other channels, for the writes of pass 2).
     Band& band_with_halo(Band& band, int row, int end, bool with_pass_through);
+    /// Rows [row_begin, row_end) of every frame as the source gives them, before
+    /// the firefly cleaning (the estimator choice judges the rebuild against
+    /// the input itself), into `raw` [frame][row][x][channel]; a non-finite sample
+    /// takes its value in `cleaned` (a band holding those rows). A fresh read.
+    void read_raw_rows(int row_begin, int row_end, const Band& cleaned, ScratchBuffer<float>& raw);
     /// A farm task's band: rows [row, end) with the plan's halo rows around them,
     /// read from the source (never the whole shot), cleaned in full.
     Band& read_task_band(Band& band, int row, int end);

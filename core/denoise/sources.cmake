@@ -2,6 +2,7 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/band_plan.cpp
   ${CMAKE_CURRENT_LIST_DIR}/block_gram.cpp
   ${CMAKE_CURRENT_LIST_DIR}/engine.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/estimator_choice.cpp
   ${CMAKE_CURRENT_LIST_DIR}/feature_guide.cpp
   ${CMAKE_CURRENT_LIST_DIR}/filter_weights.cpp
   ${CMAKE_CURRENT_LIST_DIR}/guided_filter.cpp

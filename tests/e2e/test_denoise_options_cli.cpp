@@ -5,7 +5,8 @@
 // planted cut, --weight-smoothing lowers flicker and keeps a lighting step,
 // --whiten finds a Cycles-style variance layer and keeps a quiet region's mode;
 // --mode-filter-guides finds Cycles-style features and keeps an albedo edge;
-// --rank-map writes its map and summary;
+// --rank-map writes its map and summary; --estimators takes a sweeping
+// shadow from the input's neighbourhood and reports its choice per frame;
 // bad values and combinations exit 2 with one line naming the
 // option and write nothing.
 #include "tests/tools/testkit.h"
@@ -111,6 +112,19 @@ std::vector<float> all_values(const std::string& printf_pattern)
         values.insert(values.end(), part.begin(), part.end());
     }
     return values;
+}
+// The mean squared error of every frame of `printf_pattern` (R, G, B) against truth(frame, x, y, c).
+template <typename Truth> double shot_mse(const std::string& printf_pattern, Truth truth)
+{
+    std::vector<float> values = all_values(printf_pattern);
+    double sum = 0;
+    size_t i = 0;
+    for (int frame = 1; frame <= kFrames; ++frame)
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x)
+                for (int c = 0; c < 3; ++c, ++i)
+                    sum += (values[i] - truth(frame, x, y, c)) * (values[i] - truth(frame, x, y, c));
+    return sum / static_cast<double>(values.size());
 }
 } // namespace
 
@@ -220,18 +234,7 @@ TEST_CASE("denoise --train-frames: modes from every 3rd frame, every frame writt
     CHECK(summary["temporal_modes"][0].size() == kFrames);
     // Against the clean signal: the rebuild keeps about N/F_T = 2/4 of the noise
     // variance (0.1²) with modes from 4 frames, N/F = 2/12 with all of them.
-    auto error = [&](const std::string& pattern) {
-        std::vector<float> values = all_values(pattern);
-        double sum = 0;
-        size_t i = 0;
-        for (int frame = 1; frame <= kFrames; ++frame)
-            for (int y = 0; y < kHeight; ++y)
-                for (int x = 0; x < kWidth; ++x)
-                    for (int c = 0; c < 3; ++c, ++i)
-                        sum += (values[i] - clean_value(frame, x, y, c)) *
-                               (values[i] - clean_value(frame, x, y, c));
-        return sum / values.size();
-    };
+    auto error = [&](const std::string& pattern) { return shot_mse(pattern, clean_value); };
     const double all_error = error(dir.file("all/d.%04d.exr")),
                  trained_error = error(dir.file("t/d.%04d.exr"));
     MESSAGE("MSE all frames " << all_error << ", modes from 4 of 12 frames " << trained_error);
@@ -428,6 +431,44 @@ TEST_CASE("denoise --rank-map: one 'rank' channel, never below N, summarised in 
         CHECK(name.find("modestack-tmp") == std::string::npos);
 }
 
+TEST_CASE("denoise --estimators: a shadow that sweeps comes out better than the rebuild alone, the choice "
+          "per frame "
+          "in the JSON")
+{
+    // A lit wall with a dark bar's sharp shadow moving 2 px a frame: no few modes follow it.
+    auto truth = [](int frame, int x, int, int c) {
+        const int bar = 2 + 2 * (frame - 1);
+        return (x >= bar && x < bar + 4 ? 0.1f : 1.0f) * (0.8f + 0.1f * c);
+    };
+    TempDir dir;
+    testkit::write_sequence(
+        dir.file("in.%04d.exr"), all_frames(), layout(),
+        [&](int frame, int x, int y, int c) { return truth(frame, x, y, c) + noise(frame, x, y, c); });
+    const std::string input = "denoise " + dir.file("in.####.exr") + " -q ";
+    auto plain = run_modestack(input + "-o " + dir.file("plain/d.####.exr"));
+    REQUIRE_MESSAGE(plain.exit_code == 0, plain.err);
+    auto chosen = run_modestack(input + "--estimators rebuild,input,spatial --json " + dir.file("s.json") +
+                                " -o " + dir.file("chosen/d.####.exr"));
+    REQUIRE_MESSAGE(chosen.exit_code == 0, chosen.err);
+    auto error = [&](const std::string& pattern) { return shot_mse(pattern, truth); };
+    const double plain_error = error(dir.file("plain/d.%04d.exr")),
+                 chosen_error = error(dir.file("chosen/d.%04d.exr"));
+    MESSAGE("MSE: rebuild alone " << plain_error << ", with the choice " << chosen_error << " (noise 0.01)");
+    CHECK(chosen_error < 0.7 * plain_error);
+    CHECK(chosen_error < 0.01);
+    auto estimators = load_json(dir.file("s.json"))["method"]["estimators"];
+    CHECK(estimators["set"] == nlohmann::json::array({"rebuild", "input", "spatial"}));
+    REQUIRE(estimators["frames"].size() == kFrames);
+    for (const auto& frame : estimators["frames"]) {
+        double total = 0;
+        for (const auto& [name, value] : frame["share"].items())
+            total += value.get<double>();
+        CHECK(total == doctest::Approx(1.0));
+        CHECK(frame["estimated_rms_error"]["rebuild"].get<double>() >= 0.0);
+    }
+    CHECK(estimators["frames"][0]["frame"] == 1);
+}
+
 TEST_CASE("denoise method options: bad values and combinations exit 2 with one line, nothing written")
 {
     TempDir dir;
@@ -457,12 +498,16 @@ TEST_CASE("denoise method options: bad values and combinations exit 2 with one l
         {"--no-mode-filter --train-frames 1,2", "--train-frames gives 2 frames"},
         {"--no-mode-filter --train-frames 1-12x4 --rank 3", "--rank 3 needs more than 3 training frames"},
         {"--whiten maybe", "--whiten 'maybe'"},
-        {"--weight-smoothing --no-weight-smoothing", "--weight-smoothing and --no-weight-smoothing contradict"},
+        {"--weight-smoothing --no-weight-smoothing",
+         "--weight-smoothing and --no-weight-smoothing contradict"},
         {"--whiten on --transform log", "--whiten on cannot be combined with --transform log"},
         {"--mode-filter-guides albedo,shadows", "--mode-filter-guides 'shadows'"},
         {"--mode-filter-guides depth,depth", "--mode-filter-guides names 'depth' twice"},
         {"--no-mode-filter --rank-map " + dir.file("r.exr"), "--rank-map needs the mode filter"},
         {"--segments auto --rank-map " + dir.file("r.exr"), "--rank-map cannot be combined with --segments"},
+        {"--estimators rebuild,median", "--estimators: unknown estimator 'median'"},
+        {"--estimators input --rank-map " + dir.file("r.exr"),
+         "--estimators cannot be combined with --rank-map"},
     };
     for (const Case& c : cases) {
         CAPTURE(c.arguments);

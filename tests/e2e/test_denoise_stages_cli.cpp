@@ -185,50 +185,58 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
         {solve + dir.file("a2.stats"), 1, "a2.stats: rows 0-63 are in no statistics file given"},
         {solve + dir.file("a1.stats") + " " + dir.file("b1.stats") + " " + dir.file("a2.stats"), 1,
          "are also in"},
-        {solve + dir.file("a1.stats") + " " + dir.file("other.stats"), 1, "other.stats: belongs to another shot"},
-        {solve + dir.file("a1.stats") + " " + dir.file("short.stats"), 1, "short.stats: belongs to another shot"},
+        {solve + dir.file("a1.stats") + " " + dir.file("other.stats"), 1,
+         "other.stats: belongs to another shot"},
+        {solve + dir.file("a1.stats") + " " + dir.file("short.stats"), 1,
+         "short.stats: belongs to another shot"},
         {solve + dir.file("a1.stats") + " " + dir.file("rank3.stats"), 1,
          "rank3.stats: was made with other options: --rank"},
-        {solve + dir.file("a1.stats") + " " + dir.file("junk.stats"), 1, "junk.stats: not a modestack stage file"},
+        {solve + dir.file("a1.stats") + " " + dir.file("junk.stats"), 1,
+         "junk.stats: not a modestack stage file"},
         {solve + dir.file("a1.stats") + " " + dir.file("missing.stats"), 1, "missing.stats: cannot open"},
-        {in + "--stage write --solve " + dir.file("a1.stats") + " --survey " + dir.file("shot.survey") + " --modes " +
-             dir.file("m1.modes") + " -o " + dir.file("out/d.####.exr"),
+        {in + "--stage write --solve " + dir.file("a1.stats") + " --survey " + dir.file("shot.survey") +
+             " --modes " + dir.file("m1.modes") + " -o " + dir.file("out/d.####.exr"),
          1, "a1.stats: is the output of --stage stats, not of --stage solve"},
-        {in + "--stage survey --solve " + dir.file("a1.stats") + " --rows 1/2 -o " + dir.file("out/x.survey"), 1,
-         "a1.stats: is the output of --stage stats, not of --stage solve"},
-        {with_solve + "--stage write --modes " + dir.file("m1.modes") + " -o " + dir.file("out/d.####.exr"), 1,
-         "m1.modes: rows 75-149 are in no modes file given"},
+        {in + "--stage survey --solve " + dir.file("a1.stats") + " --rows 1/2 -o " + dir.file("out/x.survey"),
+         1, "a1.stats: is the output of --stage stats, not of --stage solve"},
+        {with_solve + "--stage write --modes " + dir.file("m1.modes") + " -o " + dir.file("out/d.####.exr"),
+         1, "m1.modes: rows 75-149 are in no modes file given"},
         {with_solve + "--stage write --modes " + dir.file("m1.modes") + " " + dir.file("m0-99.modes") + " " +
              dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
          1, "are also in"},
-        {in + "--rank 2 --stage write --solve " + dir.file("rank2.solve") + " --survey " + dir.file("shot.survey") +
-             " --modes " + dir.file("m1.modes") + " " + dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
+        {in + "--rank 2 --stage write --solve " + dir.file("rank2.solve") + " --survey " +
+             dir.file("shot.survey") + " --modes " + dir.file("m1.modes") + " " + dir.file("m2.modes") +
+             " -o " + dir.file("out/d.####.exr"),
          1, "was made with other options: --rank"},
         {with_solve + "--stage write --modes " + dir.file("m1.modes") + " " + dir.file("a2.stats") + " -o " +
              dir.file("out/d.####.exr"),
          1, "a2.stats: is the output of --stage stats, not of --stage modes"},
-        {in + "--stage write --solve " + dir.file("changed.solve") + " --survey " + dir.file("changed.survey") +
-             " --modes " + dir.file("m1.modes") + " " + dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
+        {in + "--stage write --solve " + dir.file("changed.solve") + " --survey " +
+             dir.file("changed.survey") + " --modes " + dir.file("m1.modes") + " " + dir.file("m2.modes") +
+             " -o " + dir.file("out/d.####.exr"),
          1, "m1.modes: was made from another solve file than"},
-        {with_solve + "--stage write --survey " + dir.file("changed.survey") + " --modes " + dir.file("m1.modes") +
-             " " + dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
+        {with_solve + "--stage write --survey " + dir.file("changed.survey") + " --modes " +
+             dir.file("m1.modes") + " " + dir.file("m2.modes") + " -o " + dir.file("out/d.####.exr"),
          1, "changed.survey: was made from another solve file than"},
         {in + "--stage modes --solve " + dir.file("shot.solve") + " --survey " + dir.file("0-99.survey") +
              " --rows 1/2 -o " + dir.file("out/x.modes"),
          1, "0-99.survey: rows 100-149 are in no survey file given"},
-        {with_solve + "--stage write -o " + dir.file("out/d.####.exr"), 2, "--stage write needs the modes files"},
-        {in + "--stage write --solve " + dir.file("shot.solve") + " --modes " + dir.file("m1.modes") + " -o " +
-             dir.file("out/d.####.exr"),
+        {with_solve + "--stage write -o " + dir.file("out/d.####.exr"), 2,
+         "--stage write needs the modes files"},
+        {in + "--stage write --solve " + dir.file("shot.solve") + " --modes " + dir.file("m1.modes") +
+             " -o " + dir.file("out/d.####.exr"),
          2, "--stage write needs the survey files"},
         {with_solve + "--stage modes -o " + dir.file("out/x.modes"), 2, "--stage modes needs --rows"},
-        {with_solve + "--stage modes --rows 100-150 -o " + dir.file("out/x.modes"), 2, "the shot has rows 0-149"},
+        {with_solve + "--stage modes --rows 100-150 -o " + dir.file("out/x.modes"), 2,
+         "the shot has rows 0-149"},
         {in + "--stage survey --solve " + dir.file("shot.solve") + " --survey " + dir.file("shot.survey") +
              " --rows 1/2 -o " + dir.file("out/x.survey"),
          2, "--survey belongs to --stage modes or write"},
-        {in + "--stage stats --rows 1/2 --modes " + dir.file("m1.modes") + " -o " + dir.file("out/x.stats"), 2,
-         "--modes belongs to --stage write"},
-        {in + "--stage stats --rows 1/2 --non-negative --non-negative-mode keep-sum -o " + dir.file("out/x.stats"), 2,
-         "--non-negative-mode keep-sum"},
+        {in + "--stage stats --rows 1/2 --modes " + dir.file("m1.modes") + " -o " + dir.file("out/x.stats"),
+         2, "--modes belongs to --stage write"},
+        {in + "--stage stats --rows 1/2 --non-negative --non-negative-mode keep-sum -o " +
+             dir.file("out/x.stats"),
+         2, "--non-negative-mode keep-sum"},
         {in + "--stage stats --rows 10-63 -o " + dir.file("out/x.stats"), 2, "whole blocks of 64 rows"},
         {in + "--stage stats --rows 4/3 -o " + dir.file("out/x.stats"), 2, "--rows 4/3"},
         {in + "--stage stats --rows 1/4 -o " + dir.file("out/x.stats"), 2, "fewer than 4 tasks"},
@@ -239,6 +247,8 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
         {in + "--stage merge -o " + dir.file("out/x.stats"), 2, "--stage 'merge'"},
         {in + "--stage stats --rows 1/2 --report r.html -o " + dir.file("out/x.stats"), 2,
          "cannot be combined with --report"},
+        {in + "--stage stats --rows 1/2 --estimators input -o " + dir.file("out/x.stats"), 2,
+         "cannot be combined with --estimators"},
     };
     for (const Case& c : cases) {
         CAPTURE(c.arguments);

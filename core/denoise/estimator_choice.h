@@ -1,0 +1,93 @@
+// A per-pixel choice among estimators of a frame (docs/design.md, "Choosing an
+// estimator per pixel"): the temporal rebuild, the (cleaned) input and Gaussian
+// blurs of the input, judged by Stein's unbiased risk estimate (SURE) pooled over
+// a window. Where the temporal model fails (a shadow that sweeps, an object seen
+// in a few frames) the rebuild is worse than its own input; the risk estimate
+// sees it and takes what is better there, so the output is never knowingly
+// worse than the input, and sigma becomes the estimated error of what is written.
+//
+// For a sample y = x + n with noise variance v and an estimator f whose
+// derivative at the sample is w = ∂f/∂y (its divergence), SURE
+//   S = (f − y)² − v + 2·v·w
+// is an unbiased estimate of (f − x)². w is the rebuild's kept noise h (the
+// leverage, or what the mode filter keeps), a Gaussian's centre weight, 1 for the
+// input (S = v). v is the windowed mean of the squared 4-neighbour high-pass of
+// the residual y − rebuild, divided by 1 + 1/k for k neighbours: a mean (not a
+// median), so that v is the variance of the very samples SURE sees.
+//
+// The rebuild is kept unless another estimator's pooled SURE is lower by more
+// than z standard errors of the window mean of the per-pixel difference. SURE of
+// a strong denoiser is a small difference of two large noisy numbers; an argmin
+// would pick by chance wherever risks are close (measured in
+// bench/results/estimators.md: it made the indirect light 2–3× worse).
+// Sigma of the chosen estimator is its known variance part (the rebuild: the
+// engine's sigma²; a Gaussian: v·Σw²; the input: v), raised to its pooled SURE
+// where that is larger by z standard errors (the bias the variance part misses).
+#pragma once
+
+#include "core/lowrank/confidence.h"
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace modestack::denoise {
+
+/// The estimators a choice can take, in the order reports list them.
+enum class Estimator { Rebuild, Input, Gauss1, Gauss2 };
+inline constexpr int kEstimators = 4;
+
+/// The name users write: "rebuild", "input", "gauss1", "gauss2".
+std::string estimator_name(Estimator estimator);
+
+/// Settings of the choice (--estimators).
+struct EstimatorOptions {
+    bool input = false;        ///< the input itself is a candidate
+    bool spatial = false;      ///< Gaussian blurs of the input (1 and 2 px) are candidates
+    double significance = 2.0; ///< z: standard errors a switch away from the rebuild needs
+    int radius = 3;            ///< risk window radius (3: 7×7 pixels)
+    bool enabled() const { return input || spatial; }
+};
+
+/// Parses a comma-separated list of "rebuild", "input", "spatial" (rebuild is
+/// always there); throws a usage error naming a bad entry.
+EstimatorOptions parse_estimators(const std::string& list);
+
+/// Rows beyond a band's own rows that the choice needs rebuilt (with their
+/// sigma and kept noise): the risk window of the high-pass's window.
+int estimator_rebuilt_reach(const EstimatorOptions& options);
+/// Rows beyond a band's own rows that the choice needs of the input.
+int estimator_input_reach(const EstimatorOptions& options);
+
+/// One frame's rows for the choice. Rows are image rows; every plane is laid
+/// out [row][x][channel] from its first row.
+struct ChoiceFrame {
+    lowrank::ImageBandShape image; ///< the whole image's width, height and channels
+    const float* input = nullptr;  ///< the cleaned input, rows [input_begin, input_end)
+    int input_begin = 0, input_end = 0;
+    /// The rebuild, the engine's sigma and the kept noise h per sample, rows
+    /// [rebuilt_begin, rebuilt_end); kept_noise null: `leverage` everywhere.
+    const float* rebuilt = nullptr;
+    const float* sigma = nullptr;
+    const float* kept_noise = nullptr;
+    double leverage = 0;
+    int rebuilt_begin = 0, rebuilt_end = 0;
+};
+
+/// How many pixels of a frame each estimator won, and the sum of its estimated
+/// squared error over them (samples), for the report.
+struct ChoiceCounts {
+    std::array<std::int64_t, kEstimators> pixels{};
+    std::array<double, kEstimators> squared_error{};
+    void add(const ChoiceCounts& other);
+};
+
+/// Writes rows [row, end) of the chosen values and their sigma (laid out like
+/// the frame's rows) and returns what was chosen. `frame`'s rebuilt rows must
+/// cover [row, end) ± estimator_rebuilt_reach and its input rows ± input reach
+/// (clipped to the image). Deterministic: a function of those rows only.
+ChoiceCounts choose_estimators(const EstimatorOptions& options, const ChoiceFrame& frame, int row, int end,
+                               float* values, float* sigma);
+
+} // namespace modestack::denoise
