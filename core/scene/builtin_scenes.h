@@ -33,7 +33,8 @@ struct SceneInfo {
     FrameSpan highlight_frames;
 };
 
-/// The built-in scenes, in the order they are listed: static, orbit, switch, spin, flythrough.
+/// The built-in scenes, in the order they are listed: static, orbit, switch, spin, flythrough,
+/// sweep, cross.
 const std::vector<SceneInfo>& builtin_scenes();
 
 /// Builds frame `frame` of the built-in scene `name`.
@@ -46,6 +47,9 @@ inline constexpr int kSwitchCrossingFirstFrame = 30;
 inline constexpr int kSwitchCrossingLastFrame = 36;
 /// The `switch` scene's light is in its second place from this frame on.
 inline constexpr int kSwitchLightJumpFrame = 25;
+/// The `cross` scene's small box exists in these frames only (inclusive).
+inline constexpr int kCrossFirstFrame = 20;
+inline constexpr int kCrossLastFrame = 27;
 
 /// A closed room (with a box in it) where every surface has albedo `albedo` and
 /// emits `emission` towards the room: the radiance everywhere is
