@@ -1,6 +1,7 @@
 // The built-in animated scenes of `modestack render --scene NAME`: small closed
 // Cornell-style rooms (white floor, ceiling, back and front walls, red left wall,
-// green right wall, boxes, one ceiling quad light) whose animation is a closed-form
+// green right wall, boxes, a ceiling quad light; sweep and cross: a small cube key
+// light with hard shadows and a dim ceiling fill) whose animation is a closed-form
 // function of the frame number, so any frame can be rebuilt exactly and on its own
 // (the refine step re-renders single frames). Also the white-furnace room the
 // tests use to check the tracer's radiometry.
