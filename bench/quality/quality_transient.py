@@ -110,6 +110,10 @@ def section(quality_dir, models, fit_spp, input_spp, ref_spp):
                      f'{mean["gaussian"]:.4g} | {mean["auto"]:.4g} | {mean["auto"] / mean["noisy"]:.3f} | {excess} | '
                      f'{worst_noisy[0]:.4g} (f{worst_noisy[1]}) | {worst_auto[0]:.4g} (f{worst_auto[1]}) | '
                      f'{worst_ratio[0]:.3f} (f{worst_ratio[1]}) |')
+    worse = [f'{r["scene"]} {r["layer"]} at {r["spp"]} spp' for r in results
+             if sum(r["per_frame"]["auto"].values()) > sum(r["per_frame"]["noisy"].values())]
+    if worse:
+        lines += ["", "Worse than the input over the whole shot (denoise / noisy > 1): " + ", ".join(worse) + "."]
     lines += cross_lines(quality_dir, results)
     return lines, results
 
