@@ -28,8 +28,9 @@
 # REF_SPP, REF_SEED, FIT_SPP, INPUT_SPP, RANKS, SCENES, CYCLES_DIR (default
 # /work/shared/cycles/spin_room; skipped when absent), RESULTS_DIR (default bench/results: a trial
 # run at a small SIZE should write elsewhere), STAGE=render to only render.
-# Takes ~20-30 min on 2 idle cores (the 4 references are ~2/3 of it; ~50 min on the busy shared
-# machine of 2026-11-23); a re-run reuses renders, denoised outputs and comparisons (~1 min).
+# Takes ~20-30 min on 2 idle cores for the first 4 scenes (the references are ~2/3 of it; ~50 min
+# on the busy shared machine of 2026-11-23), sweep and cross add ~26 min (busy machine,
+# 2026-12-04); a re-run reuses renders, denoised outputs and comparisons (~1 min).
 # Needs /usr/bin/python3 with Debian's python3-numpy, python3-openimageio, python3-matplotlib.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
