@@ -37,10 +37,11 @@ Subcommand add_render_command(CLI::App& parent)
     CLI::App* command = parent.add_subcommand(
         "render",
         "Render a built-in animated scene or a glTF 2.0 file with the path tracer (one multi-layer EXR per frame)");
-    command->add_option("--scene", options->scene,
-                        "Built-in scene: static, orbit, switch, spin, flythrough (list: print them), or a glTF 2.0 file "
-                        "FILE.gltf|FILE.glb (meshes, animation, first camera, KHR_lights_punctual; what is "
-                        "approximated is reported on stderr)");
+    command->add_option(
+        "--scene", options->scene,
+        "Built-in scene: static, orbit, switch, spin, flythrough, sweep, cross (list: print them), or a glTF "
+        "2.0 file FILE.gltf|FILE.glb (meshes, animation, first camera, KHR_lights_punctual; what is "
+        "approximated is reported on stderr)");
     command->add_option("-o,--output", options->output, "Output frame sequence, e.g. noisy/shot.####.exr");
     command->add_option("--frames", options->frames, "Frames to render (default: all of the scene's frames)");
     command->add_option("--fps", options->fps,

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Quality benchmark of `modestack denoise` (issue 7). Not a test: it never fails on quality.
 #
-# For each built-in scene (static, orbit, switch, spin) at SIZE (160x120), FRAMES (48) frames:
+# For each built-in scene (static, orbit, switch, spin, sweep, cross) at SIZE (160x120), FRAMES (48)
+# frames:
 #  1. renders a reference at REF_SPP (256) with seed REF_SEED (7) and noisy renders at
 #     FIT_SPP (1 2 4 8 16) with seed 1 (renders are kept in QUALITY_DIR and reused when
 #     their JSON says they were made with the same settings);
@@ -13,18 +14,23 @@
 #  3. the Cycles shot /work/shared/cycles/spin_room (4 spp against its 512-spp reference)
 #     the same way (no spp sweep there: c comes from the 4-spp input alone);
 #  4. failure cases: orbit rendered with --fixed-seed at 4 spp, the transient box of switch
-#     (frames 30-36) and `modestack refine` on the denoised switch shot;
+#     (frames 30-36) and `modestack refine` on the denoised switch shot; fast light (issue 29):
+#     sweep (hard shadows that move every frame) and cross (a box and its shadow in frames
+#     20-27 only) scored on DiffDir too, per frame: noisy, Gaussian 1.5 px, default denoise,
+#     with DiffDir's own c/s fit so the reference's noise b is counted as for DiffInd;
 #  5. quality.py fits relMSE(s) = c/s, the time model t(s) = t0 + k*s, and quality_report.py
-#     writes bench/results/quality.md (+ quality_summary.md, quality.json) and the plots
-#     bench/results/quality_{relmse_vs_spp,spectra,error_maps}.png.
+#     writes RESULTS_DIR/quality.md (+ quality_summary.md, quality.json) and the plots
+#     RESULTS_DIR/quality_{relmse_vs_spp,spectra,error_maps,transient_per_frame}.png.
 # The formulas are the ones of docs/design.md, "How quality is measured".
 #
 # Environment: QUALITY_DIR (work files, default /tmp/modestack-quality), BUILD_DIR (default
 # $QUALITY_DIR/build; set it to an existing Release build to skip building), SIZE, FRAMES,
-# REF_SPP, REF_SEED, FIT_SPP, INPUT_SPP, RANKS, CYCLES_DIR (default
-# /work/shared/cycles/spin_room; skipped when absent), STAGE=render to only render.
-# Takes ~20-30 min on 2 idle cores (the 4 references are ~2/3 of it; ~50 min on the busy shared
-# machine of 2026-11-23); a re-run reuses renders, denoised outputs and comparisons (~1 min).
+# REF_SPP, REF_SEED, FIT_SPP, INPUT_SPP, RANKS, SCENES, CYCLES_DIR (default
+# /work/shared/cycles/spin_room; skipped when absent), RESULTS_DIR (default bench/results: a trial
+# run at a small SIZE should write elsewhere), STAGE=render to only render.
+# Takes ~20-30 min on 2 idle cores for the first 4 scenes (the references are ~2/3 of it; ~50 min
+# on the busy shared machine of 2026-11-23), sweep and cross add ~26 min (busy machine,
+# 2026-12-04); a re-run reuses renders, denoised outputs and comparisons (~1 min).
 # Needs /usr/bin/python3 with Debian's python3-numpy, python3-openimageio, python3-matplotlib.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -40,10 +46,10 @@ fit_spp=${FIT_SPP:-1 2 4 8 16}
 input_spp=${INPUT_SPP:-1 4 16}
 ranks=${RANKS:-1 2 3 4 5 6 7 8}
 cycles_dir=${CYCLES_DIR:-/work/shared/cycles/spin_room}
-scenes=${SCENES:-static orbit switch spin}
+scenes=${SCENES:-static orbit switch spin sweep cross}
 python=/usr/bin/python3
 export PYTHONDONTWRITEBYTECODE=1  # no __pycache__ in the source tree
-results=$repository/bench/results
+results=${RESULTS_DIR:-$repository/bench/results}
 mkdir -p "$quality_dir" "$results"
 
 # The fit, the filters and the plots need Debian's numpy, OpenImageIO and matplotlib for
@@ -109,7 +115,10 @@ up_to_date()
     done
 }
 
-# compare TEST REF JSON [OPTIONS]: `modestack compare` on DiffInd into JSON (kept when it exists
+# The layer compare, denoise and baseline work on; the DiffDir evaluation sets it locally.
+layer=DiffInd
+
+# compare TEST REF JSON [OPTIONS]: `modestack compare` on $layer into JSON (kept when it exists
 # and is newer than TEST's first frame). Its exit code 1/2 (warn/fail against idiff's tiny
 # default thresholds) is expected; 3 and above are errors.
 compare()
@@ -120,7 +129,7 @@ compare()
         return
     fi
     local status=0
-    "$modestack" compare "$test" "$reference" --layer DiffInd --json "$output.tmp" -q "$@" >/dev/null || status=$?
+    "$modestack" compare "$test" "$reference" --layer "$layer" --json "$output.tmp" -q "$@" >/dev/null || status=$?
     if ((status > 2)); then
         echo "quality: compare $test $reference failed with exit code $status" >&2
         return 1
@@ -138,7 +147,7 @@ denoise()
         return
     fi
     rm -rf "$directory"
-    "$modestack" denoise "$input" --layer DiffInd -o "$directory/f.####.exr" --json "$directory.json.tmp" -q "$@"
+    "$modestack" denoise "$input" --layer "$layer" -o "$directory/f.####.exr" --json "$directory.json.tmp" -q "$@"
     mv "$directory.json.tmp" "$directory.json"
 }
 
@@ -150,7 +159,7 @@ baseline()
         return
     fi
     rm -rf "$directory"
-    "$python" "$quality_py" baseline "$kind" "$input" "$directory" --json "$directory.json"
+    "$python" "$quality_py" baseline "$kind" "$input" "$directory" --json "$directory.json" --layer "$layer"
 }
 
 # evaluate INPUT REF DIR: every method on one noisy input; results in DIR/*.json.
@@ -164,7 +173,9 @@ evaluate()
     compare "$directory/temporal/f.####.exr" "$reference" "$directory/temporal.cmp.json"
     baseline gaussian "$input" "$directory/gaussian"
     compare "$directory/gaussian/f.####.exr" "$reference" "$directory/gaussian.cmp.json"
-    rm -rf "$directory/temporal" "$directory/gaussian"
+    rm -rf "$directory/temporal"
+    # sweep's and cross's 4-spp Gaussian stays for the report's box region (failure case 3).
+    [[ $directory == */sweep/s4 || $directory == */cross/s4 ]] || rm -rf "$directory/gaussian"
     denoise "$input" "$directory/auto"
     compare "$directory/auto/f.####.exr" "$reference" "$directory/auto.cmp.json"
     for rank in $ranks; do
@@ -215,6 +226,39 @@ if [[ " $scenes " == *" switch "* && " $input_spp " == *" 4 "* ]]; then
         compare "$transient/refined/f.####.exr" "$switch_reference" "$transient/refined_shot.cmp.json"
     fi
 fi
+
+# Failure case 3: fast light (issue 29). sweep and cross on their direct light, where the hard
+# shadows move: the noisy renders against the reference at every spp (DiffDir's own c/s fit),
+# then at each input spp the noisy input, the Gaussian and the default denoise of --layer DiffDir
+# (their DiffInd rows are the evaluation above). Every compare JSON holds per-frame figures:
+# the report shows the worst frame, and for cross the crossing frames 20-27 (kCrossFirstFrame..
+# kCrossLastFrame of core/scene/builtin_scenes.h) and the pixels the box changes.
+evaluate_direct()
+{
+    local scene=$1 layer=DiffDir spp
+    local reference=$quality_dir/$scene/ref/f.####.exr direct=$quality_dir/$scene/direct
+    mkdir -p "$direct"
+    for spp in $fit_spp $input_spp; do
+        compare "$quality_dir/$scene/noisy_s$spp/f.####.exr" "$reference" "$direct/fit_s$spp.cmp.json"
+    done
+    for spp in $input_spp; do
+        local input=$quality_dir/$scene/noisy_s$spp/f.####.exr directory=$direct/s$spp
+        echo "quality: evaluate $directory (DiffDir)" >&2
+        mkdir -p "$directory"
+        compare "$input" "$reference" "$directory/noisy.cmp.json"
+        baseline gaussian "$input" "$directory/gaussian"
+        compare "$directory/gaussian/f.####.exr" "$reference" "$directory/gaussian.cmp.json"
+        denoise "$input" "$directory/auto"
+        compare "$directory/auto/f.####.exr" "$reference" "$directory/auto.cmp.json"
+        # Kept for the report's box region and error maps: the 4-spp results only.
+        [[ $spp == 4 ]] || rm -rf "$directory/gaussian" "$directory/auto"
+    done
+}
+for scene in sweep cross; do
+    if [[ " $scenes " == *" $scene "* ]]; then
+        evaluate_direct "$scene"
+    fi
+done
 
 # The Cycles shot: 4 spp against its 512-spp reference, no spp sweep.
 if [[ -d $cycles_dir/spp4 && -d $cycles_dir/ref ]]; then

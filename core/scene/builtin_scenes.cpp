@@ -22,6 +22,11 @@ const Vec3 kWhite{0.73f, 0.73f, 0.73f};
 const Vec3 kRed{0.63f, 0.065f, 0.05f};
 const Vec3 kGreen{0.14f, 0.45f, 0.091f};
 const Vec3 kLightEmission{22.0f, 18.0f, 12.5f};
+const Vec3 kFillEmission = kLightEmission * 0.12f;
+// sweep's and cross's key light: a 5 cm cube, about as bright in total as the ceiling light.
+constexpr float kKeyLightEdge = 0.05f;
+const Vec3 kKeyLightEmission{190.0f, 165.0f, 120.0f};
+const Vec3 kCrossKeyLight{-0.7f, 1.0f, 1.4f};
 
 Mesh make_wall(const std::string& name, Vec3 albedo, Vec3 emission, Vec3 p0, Vec3 p1, Vec3 p2, Vec3 p3)
 {
@@ -148,6 +153,62 @@ Scene make_flythrough(int frame)
     return scene;
 }
 
+// A small cube that emits from all six faces: a near-point key light whose shadows
+// stay hard (penumbra ≈ edge × distance behind the occluder / distance to it).
+Mesh make_cube_light(const std::string& name, Vec3 center, float edge, Vec3 emission)
+{
+    Material material;
+    material.albedo = {0.78f, 0.78f, 0.78f};
+    material.emission = emission;
+    return make_box(name, {center.x, center.y - 0.5f * edge, center.z}, {edge, edge, edge}, 0, material);
+}
+
+// A dim ceiling quad so that every surface the key light misses still gets some light.
+Mesh make_fill_light()
+{
+    return make_ceiling_light("fill light", {0, kLightY, 0.2f}, 0.5f, 0.5f, kFillEmission);
+}
+
+// A small hard key light circles the room once, low (30 cm above the floor), round two
+// boxes: their long shadows sweep across the floor and all four walls, ~7.5° per frame.
+Scene make_sweep(int frame)
+{
+    Scene scene = make_lit_room();
+    scene.meshes.push_back(
+        make_box("tall box", {-0.25f, 0, -0.15f}, {0.4f, 1.0f, 0.4f}, 0.3f, white_material()));
+    scene.meshes.push_back(
+        make_box("short box", {0.3f, 0, 0.25f}, {0.35f, 0.35f, 0.35f}, -0.3f, white_material()));
+    // Radius 0.8 m about (0, 0.05): clear of both boxes (≤ 0.67 m from the centre) and of the walls.
+    float angle =
+        2 * kPi * static_cast<float>(frame - kFirstFrame) / static_cast<float>(kLastFrame - kFirstFrame + 1);
+    Vec3 center{0.8f * std::sin(angle), 0.3f, 0.05f + 0.8f * std::cos(angle)};
+    scene.meshes.push_back(make_cube_light("key light", center, kKeyLightEdge, kKeyLightEmission));
+    scene.meshes.push_back(make_fill_light());
+    return scene;
+}
+
+// Fixed lighting; a small box flies across the room, left to right, in frames
+// kCrossFirstFrame..kCrossLastFrame only, a little more than its own width per frame.
+Scene make_cross(int frame)
+{
+    Scene scene = make_lit_room();
+    scene.meshes.push_back(
+        make_box("tall box", {-0.38f, 0, -0.35f}, {0.55f, 1.2f, 0.55f}, 0.3f, white_material()));
+    scene.meshes.push_back(
+        make_box("short box", {0.4f, 0, 0.2f}, {0.55f, 0.55f, 0.55f}, -0.3f, white_material()));
+    scene.meshes.push_back(make_cube_light("key light", kCrossKeyLight, kKeyLightEdge, kKeyLightEmission));
+    scene.meshes.push_back(make_fill_light());
+    if (frame >= kCrossFirstFrame && frame <= kCrossLastFrame) {
+        float t = static_cast<float>(frame - kCrossFirstFrame) /
+                  static_cast<float>(kCrossLastFrame - kCrossFirstFrame);
+        Material yellow;
+        yellow.albedo = {0.7f, 0.55f, 0.1f};
+        scene.meshes.push_back(
+            make_box("crossing box", {-0.8f + 1.6f * t, 0.3f, 0.75f}, {0.2f, 0.2f, 0.2f}, 1.5f * t, yellow));
+    }
+    return scene;
+}
+
 std::string scene_names()
 {
     std::string names;
@@ -166,13 +227,32 @@ const std::vector<SceneInfo>& builtin_scenes()
         {"switch",
          "the light jumps to another place at frame 25; a small blue box crosses the floor in frames 30-36 "
          "only",
-         kFirstFrame, kLastFrame, {kSwitchCrossingFirstFrame, kSwitchCrossingLastFrame}},
-        {"spin", "a flat box turns half a turn under a fixed light; its shadow sweeps the floor", kFirstFrame,
-         kLastFrame, {}},
+         kFirstFrame,
+         kLastFrame,
+         {kSwitchCrossingFirstFrame, kSwitchCrossingLastFrame}},
+        {"spin",
+         "a flat box turns half a turn under a fixed light; its shadow sweeps the floor",
+         kFirstFrame,
+         kLastFrame,
+         {}},
         {"flythrough",
          "the camera moves through the room while the light changes colour and strength and the short box "
          "turns (object-space denoising)",
-         kFirstFrame, kLastFrame, {}},
+         kFirstFrame,
+         kLastFrame,
+         {}},
+        {"sweep",
+         "a small low key light circles the room once: the boxes' hard shadows sweep floor and walls every "
+         "frame (dim ceiling fill)",
+         kFirstFrame,
+         kLastFrame,
+         {}},
+        {"cross",
+         "fixed small key light; a small yellow box flies across the room in frames 20-27 only, its hard "
+         "shadow with it",
+         kFirstFrame,
+         kLastFrame,
+         {kCrossFirstFrame, kCrossLastFrame}},
     };
     return scenes;
 }
@@ -196,6 +276,10 @@ Scene make_builtin_scene(const std::string& name, int frame)
         return make_switch(frame);
     if (name == "flythrough")
         return make_flythrough(frame);
+    if (name == "sweep")
+        return make_sweep(frame);
+    if (name == "cross")
+        return make_cross(frame);
     return make_spin(frame);
 }
 

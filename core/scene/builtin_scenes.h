@@ -1,6 +1,7 @@
 // The built-in animated scenes of `modestack render --scene NAME`: small closed
 // Cornell-style rooms (white floor, ceiling, back and front walls, red left wall,
-// green right wall, boxes, one ceiling quad light) whose animation is a closed-form
+// green right wall, boxes, a ceiling quad light; sweep and cross: a small cube key
+// light with hard shadows and a dim ceiling fill) whose animation is a closed-form
 // function of the frame number, so any frame can be rebuilt exactly and on its own
 // (the refine step re-renders single frames). Also the white-furnace room the
 // tests use to check the tracer's radiometry.
@@ -33,7 +34,8 @@ struct SceneInfo {
     FrameSpan highlight_frames;
 };
 
-/// The built-in scenes, in the order they are listed: static, orbit, switch, spin, flythrough.
+/// The built-in scenes, in the order they are listed: static, orbit, switch, spin, flythrough,
+/// sweep, cross.
 const std::vector<SceneInfo>& builtin_scenes();
 
 /// Builds frame `frame` of the built-in scene `name`.
@@ -46,6 +48,9 @@ inline constexpr int kSwitchCrossingFirstFrame = 30;
 inline constexpr int kSwitchCrossingLastFrame = 36;
 /// The `switch` scene's light is in its second place from this frame on.
 inline constexpr int kSwitchLightJumpFrame = 25;
+/// The `cross` scene's small box exists in these frames only (inclusive).
+inline constexpr int kCrossFirstFrame = 20;
+inline constexpr int kCrossLastFrame = 27;
 
 /// A closed room (with a box in it) where every surface has albedo `albedo` and
 /// emits `emission` towards the room: the radiance everywhere is

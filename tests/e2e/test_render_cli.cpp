@@ -66,8 +66,9 @@ TEST_CASE("render: --scene list, and bad options give one line and exit 1 or 2")
 {
     auto list = run_modestack("render --scene list");
     CHECK(list.exit_code == 0);
-    for (const char* scene : {"static", "orbit", "switch", "spin"})
-        CHECK(list.out.find(scene) != std::string::npos);
+    // One line per scene, starting with its name.
+    for (const char* scene : {"static", "orbit", "switch", "spin", "flythrough", "sweep", "cross"})
+        CHECK(("\n" + list.out).find("\n" + std::string(scene) + " ") != std::string::npos);
     TempDir dir;
     struct Case {
         std::string arguments;

@@ -1,6 +1,7 @@
 // The built-in animated scenes: names and frame ranges, exact per-frame
 // animation, finite renders of every scene, and the switch scene's crossing box
-// present in its frames only.
+// present in its frames only (sweep's and cross's own properties:
+// test_transient_scenes.cpp).
 #include "core/common/error.h"
 #include "core/render/render.h"
 #include "core/scene/builtin_scenes.h"
@@ -40,15 +41,17 @@ ErrorKind kind_of_scene_error(const std::string& name, int frame)
 
 } // namespace
 
-TEST_CASE("scenes: the five built-in scenes have 48 frames each")
+TEST_CASE("scenes: the seven built-in scenes have 48 frames each")
 {
     const auto& scenes = scene::builtin_scenes();
-    REQUIRE(scenes.size() == 5);
+    REQUIRE(scenes.size() == 7);
     CHECK(scenes[0].name == "static");
     CHECK(scenes[1].name == "orbit");
     CHECK(scenes[2].name == "switch");
     CHECK(scenes[3].name == "spin");
     CHECK(scenes[4].name == "flythrough");
+    CHECK(scenes[5].name == "sweep");
+    CHECK(scenes[6].name == "cross");
     for (const auto& info : scenes) {
         CHECK(info.first_frame == 1);
         CHECK(info.last_frame == 48);
@@ -65,7 +68,7 @@ TEST_CASE("scenes: unknown names and frames out of range are usage errors")
         scene::make_builtin_scene("nope", 1);
     } catch (const Error& error) {
         std::string message = error.what();
-        CHECK(message.find("static, orbit, switch, spin, flythrough") != std::string::npos);
+        CHECK(message.find("static, orbit, switch, spin, flythrough, sweep, cross") != std::string::npos);
         CHECK(message.find('\n') == std::string::npos);
     }
     CHECK_THROWS_AS(scene::make_furnace_scene(1.0f, 0.5f), Error);
@@ -78,7 +81,7 @@ TEST_CASE("scenes: animation is exact per frame and moves where it should")
             CHECK(same_geometry(scene::make_builtin_scene(info.name, frame),
                                 scene::make_builtin_scene(info.name, frame)));
     CHECK(same_geometry(scene::make_builtin_scene("static", 1), scene::make_builtin_scene("static", 48)));
-    for (const char* moving : {"orbit", "spin"})
+    for (const char* moving : {"orbit", "spin", "sweep"})
         for (int frame = 1; frame < 48; ++frame)
             CHECK(!same_geometry(scene::make_builtin_scene(moving, frame),
                                  scene::make_builtin_scene(moving, frame + 1)));
@@ -89,6 +92,12 @@ TEST_CASE("scenes: animation is exact per frame and moves where it should")
             (frame + 1 >= scene::kSwitchCrossingFirstFrame && frame <= scene::kSwitchCrossingLastFrame);
         CHECK(expect_change != same_geometry(scene::make_builtin_scene("switch", frame),
                                              scene::make_builtin_scene("switch", frame + 1)));
+    }
+    // cross: only the flying box moves, and it exists in frames 20-27 only.
+    for (int frame = 1; frame < 48; ++frame) {
+        bool expect_change = frame + 1 >= scene::kCrossFirstFrame && frame <= scene::kCrossLastFrame;
+        CHECK(expect_change != same_geometry(scene::make_builtin_scene("cross", frame),
+                                             scene::make_builtin_scene("cross", frame + 1)));
     }
 }
 
