@@ -134,7 +134,7 @@ Subcommand add_info_command(CLI::App& parent)
     auto options = std::make_shared<InfoOptions>();
     CLI::App* command = parent.add_subcommand(
         "info", "Describe a frame sequence: frames and gaps, windows, channels by layer, pixel types, attributes");
-    command->add_option("SEQ", options->pattern, "Frame-sequence pattern: name.####.exr, name.%04d.exr, name.@.exr")
+    command->add_option("SEQ", options->pattern, "Frame-sequence pattern: name.####.exr, name.%04d.exr, name.%d.exr (unpadded), name.@.exr")
         ->required();
     command->add_option("--frames", options->frames, "Only these frames: 1-48, 1001-1100, 1-100x2, 1,3,7-9");
     command->add_option("--json", options->json_path, "Also write the description as JSON to this file");
