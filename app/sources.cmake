@@ -2,6 +2,8 @@ target_sources(modestack_app PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/command_line.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_context.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_info.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/info_job.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/info_description.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_denoise.cpp
   ${CMAKE_CURRENT_LIST_DIR}/denoise_job.cpp
   ${CMAKE_CURRENT_LIST_DIR}/denoise_summary.cpp

@@ -1,10 +1,12 @@
 // Fuzz harness: an image file through modestack's io layer, as `info` and the
-// readers of every subcommand see it: read_frame_header(), then the
+// readers of every subcommand see it: `info`'s checks (chunk tables, every
+// chunk decoded) and read_frame_header(), then the
 // SequenceReader of a one-frame sequence (validation, layer selection), then
 // every row read as float and in native types. The input is written to a
 // temporary file first (the io layer opens files by name). Every rejection
 // must be a modestack::Error (main() turns anything else into "internal error").
 #include "core/common/error.h"
+#include "io/frame_check.h"
 #include "io/frame_header.h"
 #include "io/sequence_reader.h"
 #include "io/text_output.h"
@@ -37,6 +39,8 @@ const std::string& scratch_file()
 
 void read_everything(const std::string& file)
 {
+    // `info`'s check of the chunk tables reads them from the untrusted bytes too.
+    modestack::io::check_chunk_tables(file);
     modestack::io::FrameHeader header = modestack::io::read_frame_header(file);
     if (header.width <= 0 || header.height <= 0)
         return;
@@ -50,6 +54,7 @@ void read_everything(const std::string& file)
                         std::max<long long>(reader.selected_channel_count(), static_cast<long long>(header.channel_names.size()));
     if (samples > kMaxSamples)
         return;
+    modestack::io::check_every_chunk(file);  // `info --check`
     std::vector<float> selected(static_cast<std::size_t>(reader.width()) * kBandRows * reader.selected_channel_count());
     std::vector<unsigned char> native;
     for (int row = 0; row < reader.height(); row += kBandRows) {

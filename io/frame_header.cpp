@@ -7,6 +7,28 @@
 
 namespace modestack::io {
 
+namespace {
+
+ImagePart describe_part(const OIIO::ImageSpec& spec)
+{
+    ImagePart part;
+    part.name = spec.get_string_attribute("oiio:subimagename");
+    part.x = spec.x;
+    part.y = spec.y;
+    part.width = spec.width;
+    part.height = spec.height;
+    part.tile_width = spec.tile_width;
+    part.tile_height = spec.tile_height;
+    part.deep = spec.deep;
+    part.channel_names = spec.channelnames;
+    for (int c = 0; c < spec.nchannels; ++c)
+        part.channel_types.push_back(spec.channelformat(c).c_str());
+    part.compression = spec.get_string_attribute("compression", "none");
+    return part;
+}
+
+} // namespace
+
 FrameHeader read_frame_header(const std::string& file)
 {
     auto input = detail::open_checked_image(file);
@@ -14,30 +36,18 @@ FrameHeader read_frame_header(const std::string& file)
     FrameHeader header;
     header.file = file;
     header.format_name = input->format_name();
-    header.x = spec.x;
-    header.y = spec.y;
-    header.width = spec.width;
-    header.height = spec.height;
+    static_cast<ImagePart&>(header) = describe_part(spec);
     header.full_x = spec.full_x;
     header.full_y = spec.full_y;
     header.full_width = spec.full_width;
     header.full_height = spec.full_height;
-    header.tile_width = spec.tile_width;
-    header.tile_height = spec.tile_height;
-    header.deep = spec.deep;
-    header.channel_names = spec.channelnames;
-    for (int c = 0; c < spec.nchannels; ++c)
-        header.channel_types.push_back(spec.channelformat(c).c_str());
-    header.compression = spec.get_string_attribute("compression", "none");
-    int subimages = 1;
-    while (input->seek_subimage(subimages, 0))
-        ++subimages;
-    header.subimages = subimages;
     for (const auto& attribute : spec.extra_attribs) {
         std::string name = attribute.name().string();
         header.attributes.emplace_back(name, fmt::format("{} {}", attribute.type().c_str(),
                                                          spec.metadata_val(attribute, true)));
     }
+    for (int part = 0; input->seek_subimage(part, 0); ++part)
+        header.parts.push_back(describe_part(input->spec()));
     return header;
 }
 

@@ -1,7 +1,7 @@
 // What one image file's header says, in plain types: size, windows, channels
-// with their pixel types, compression, tiling and attributes. Used by
-// `modestack info` and to check that the frames of a sequence agree before any
-// work starts.
+// with their pixel types, compression, tiling and attributes, and the same for
+// every part of a multi-part EXR. Used by `modestack info` and to check that the
+// frames of a sequence agree before any work starts.
 #pragma once
 
 #include <string>
@@ -10,19 +10,26 @@
 
 namespace modestack::io {
 
-/// An image header summarized for people and for validation.
-struct FrameHeader {
-    std::string file;
-    std::string format_name;  ///< "openexr", ...
-    int x = 0, y = 0, width = 0, height = 0;                     ///< data window
-    int full_x = 0, full_y = 0, full_width = 0, full_height = 0;  ///< display window
-    int tile_width = 0, tile_height = 0;                          ///< 0 for scanline files
-    int subimages = 1;                                            ///< parts of a multi-part EXR
+/// One part of a multi-part EXR file (a single-part file, or another format,
+/// has one): what `info` lists of each.
+struct ImagePart {
+    std::string name;                        ///< the part's name, "" when it has none
+    int x = 0, y = 0, width = 0, height = 0; ///< data window
+    int tile_width = 0, tile_height = 0;     ///< 0 for scanline parts
     bool deep = false;
     std::vector<std::string> channel_names;
     std::vector<std::string> channel_types;  ///< "half", "float", "uint", one per channel
     std::string compression;
-    /// Header attributes as (name, "type value") in a human form.
+};
+
+/// An image header summarized for people and for validation. The fields it
+/// has as an ImagePart describe part 0, the part every reader reads.
+struct FrameHeader : ImagePart {
+    std::string file;
+    std::string format_name;                                     ///< "openexr", ...
+    int full_x = 0, full_y = 0, full_width = 0, full_height = 0; ///< display window
+    std::vector<ImagePart> parts;                                ///< every part, part 0 first
+    /// Header attributes of part 0 as (name, "type value") in a human form.
     std::vector<std::pair<std::string, std::string>> attributes;
 };
 

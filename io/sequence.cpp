@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <filesystem>
 #include <limits>
 #include <set>
 
@@ -147,6 +148,67 @@ bool parse_range_part(const std::string& part, long long frames_so_far, const st
     return true;
 }
 
+// The file name of `printf_pattern` split at its frame conversion, with "%%"
+// read as "%": "shot.%04d.exr" is "shot." and ".exr".
+struct FrameSlot {
+    std::string before, after;
+};
+
+FrameSlot frame_slot(const std::string& file_name)
+{
+    FrameSlot slot;
+    std::string* side = &slot.before;
+    for (size_t i = 0; i < file_name.size(); ++i) {
+        if (file_name[i] != '%') {
+            side->push_back(file_name[i]);
+        } else if (i + 1 < file_name.size() && file_name[i + 1] == '%') {
+            side->push_back('%');
+            ++i;
+        } else {
+            i = file_name.find('d', i);
+            if (i == std::string::npos)
+                break;
+            side = &slot.after;
+        }
+    }
+    return slot;
+}
+
+// The frames of `printf_pattern` (one frame conversion, in its file name) on
+// disk, ascending. The one rule for every command that reads a sequence: a
+// file is a frame when the pattern writes exactly its name for the number in
+// it, so "%04d" (and "####") finds name.0007.exr and name.12345.exr, and "%d"
+// (and "@") finds name.7.exr but not name.007.exr. We list the directory
+// ourselves: OIIO's scan finds nothing for "%d", and builds a regex of the
+// directory's name, so "(" or "+" in a path broke it.
+std::vector<std::pair<int, std::string>> frames_on_disk(const std::string& printf_pattern)
+{
+    std::string directory = fs::parent_path(printf_pattern);
+    FrameSlot slot = frame_slot(fs::filename(printf_pattern));
+    std::vector<std::pair<int, std::string>> found;
+    std::error_code error;
+    for (std::filesystem::directory_iterator entry(directory.empty() ? "." : directory, error), end;
+         !error && entry != end; entry.increment(error)) {
+        std::string name = entry->path().filename().string();
+        if (name.size() <= slot.before.size() + slot.after.size() ||
+            name.compare(0, slot.before.size(), slot.before) ||
+            name.compare(name.size() - slot.after.size(), slot.after.size(), slot.after))
+            continue;
+        std::string number =
+            name.substr(slot.before.size(), name.size() - slot.before.size() - slot.after.size());
+        size_t at = 0;
+        long long frame = 0;
+        if (!parse_integer(number, at, frame) || at != number.size())
+            continue;
+        std::string file = format_frame(printf_pattern, static_cast<int>(frame));
+        std::error_code type_error;
+        if (fs::filename(file) == name && entry->is_regular_file(type_error))
+            found.emplace_back(static_cast<int>(frame), file);
+    }
+    std::sort(found.begin(), found.end());
+    return found;
+}
+
 }  // namespace
 
 // OIIO parses patterns with std::regex, which recurses once per character: a
@@ -246,23 +308,9 @@ FrameSequence scan_input_sequence(const std::string& pattern)
     std::string directory = fs::parent_path(sequence.printf_pattern);
     if (!directory.empty() && !fs::is_directory(directory))
         throw bad_input(directory, "directory does not exist");
-    std::vector<int> frames;
-    std::vector<std::string> files;
-    // OIIO scans nothing for a pattern without a directory: scan "./" and strip it.
-    bool bare = directory.empty();
-    fs::scan_for_matching_filenames(bare ? "./" + sequence.printf_pattern : sequence.printf_pattern, frames, files);
-    if (bare)
-        for (std::string& file : files)
-            if (file.rfind("./", 0) == 0)
-                file.erase(0, 2);
-    // Keep only names written exactly as the pattern writes them (padding matters).
-    std::vector<std::pair<int, std::string>> found;
-    for (size_t i = 0; i < frames.size(); ++i)
-        if (files[i] == format_frame(sequence.printf_pattern, frames[i]))
-            found.emplace_back(frames[i], files[i]);
+    std::vector<std::pair<int, std::string>> found = frames_on_disk(sequence.printf_pattern);
     if (found.empty())
         throw bad_input(pattern, "no frames found on disk");
-    std::sort(found.begin(), found.end());
     for (auto& [frame, file] : found) {
         sequence.frames.push_back(frame);
         sequence.files.push_back(file);

@@ -1,9 +1,11 @@
 // Frame-sequence patterns and frame ranges, as oiiotool writes them:
-// `dir/name.####.exr`, `name.%04d.exr`, `name.@@@@.exr`, `name.1-10#.exr`, and
-// ranges `1001-1100`, `1-100x2`, `1,3,7-9`. Built on OIIO's Filesystem sequence
-// helpers; the one convention we add is that a run of several `#` means one
-// digit each (`####` = 4 digits, as Nuke, Houdini and Blender read it), while a
-// lone `#` keeps oiiotool's meaning of 4 digits.
+// `dir/name.####.exr`, `name.%04d.exr`, `name.%d.exr`, `name.@@@@.exr`,
+// `name.1-10#.exr`, and ranges `1001-1100`, `1-100x2`, `1,3,7-9`. Patterns are
+// parsed with OIIO's Filesystem helpers; the one convention we add is that a run
+// of several `#` means one digit each (`####` = 4 digits, as Nuke, Houdini and
+// Blender read it), while a lone `#` keeps oiiotool's meaning of 4 digits. As in
+// oiiotool and Nuke, `%d` (and `@`) is unpadded and `%04d` is padded to 4 digits:
+// a file on disk is a frame when the pattern writes exactly its name.
 #pragma once
 
 #include <string>
@@ -24,13 +26,15 @@ struct FrameSequence {
 std::vector<int> parse_frame_range(const std::string& spec, const std::string& option = "--frames");
 
 /// Converts a pattern to printf form. Returns false when `pattern` has no frame
-/// token (#, @ or %0Nd) or is longer than any path (4096 bytes). `embedded_range` receives a range written inside the
-/// pattern (`name.1-10#.exr`), or "".
+/// token (#, @, %d or %0Nd) or is longer than any path (4096 bytes). `embedded_range` receives a range
+/// written inside the pattern (`name.1-10#.exr`), or "".
 bool normalize_pattern(const std::string& pattern, std::string& printf_pattern,
                        std::string& embedded_range);
 
-/// The frames of a sequence found on disk, in ascending order, gaps allowed.
-/// Throws Error (bad input) when the directory is missing or nothing matches.
+/// The frames of a sequence found on disk, in ascending order, gaps allowed: the
+/// files whose names the pattern writes for the number in them (name.7.exr for
+/// name.%d.exr, name.0007.exr for name.%04d.exr). Throws Error (bad input) when the directory is missing or
+/// nothing matches.
 FrameSequence scan_input_sequence(const std::string& pattern);
 
 /// The frame numbers missing between the first and last frame of `frames` (ascending).

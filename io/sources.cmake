@@ -3,6 +3,9 @@ target_sources(modestack_io PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/layers.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_header.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/open_image.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/detail/exr_headers.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/detail/exr_chunk_table.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/frame_check.cpp
   ${CMAKE_CURRENT_LIST_DIR}/sequence_reader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/zip_scanline_reader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/exr_core.cpp

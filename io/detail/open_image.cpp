@@ -1,9 +1,10 @@
 #include "io/detail/open_image.h"
 
+#include "io/detail/exr_headers.h"
+
 #include <OpenImageIO/filesystem.h>
 #include <fmt/format.h>
 
-#include <cstdint>
 #include <fstream>
 
 namespace modestack::io::detail {
@@ -11,42 +12,17 @@ namespace {
 
 // OpenEXR allocates an attribute's declared size before reading it: a damaged
 // 280-byte header that declared a 1.7 GB string made `info` take 1.8 GB and 6 s
-// (found by fuzz/exr_header). Walk the first header and refuse any attribute
-// larger than the file. Not an EXR, or a header we cannot walk: leave it to OIIO.
-// Returns the problem, or an empty string.
+// (found by fuzz/exr_header). Walk the headers (every part's) and refuse any
+// attribute larger than the file. Not an EXR, or headers we cannot walk: leave
+// it to OIIO. Returns the problem, or an empty string.
 std::string exr_header_problem(const std::string& file)
 {
-    std::ifstream in(file, std::ios::binary);
     // OIIO calls an empty file "not an OpenEXR file"; say what it is (an
     // interrupted copy, a render that died before writing).
+    std::ifstream in(file, std::ios::binary);
     if (in && in.peek() == std::ifstream::traits_type::eof())
         return "empty file (0 bytes)";
-    std::uint32_t magic = 0, version = 0;
-    if (!in.read(reinterpret_cast<char*>(&magic), 4) || !in.read(reinterpret_cast<char*>(&version), 4) ||
-        magic != 20000630)
-        return {};
-    in.seekg(0, std::ios::end);
-    const std::int64_t file_size = in.tellg();
-    in.seekg(8);
-    auto read_name = [&](std::string& name) {
-        name.clear();
-        char c = 0;
-        while (in.get(c) && c != '\0' && name.size() < 256)
-            name.push_back(c);
-        return static_cast<bool>(in) && c == '\0';
-    };
-    std::string name, type;
-    while (read_name(name) && !name.empty()) {
-        std::int32_t size = 0;
-        if (!read_name(type) || !in.read(reinterpret_cast<char*>(&size), 4))
-            return {};
-        std::int64_t left = file_size - static_cast<std::int64_t>(in.tellg());
-        if (size < 0 || size > left)
-            return fmt::format("damaged header: attribute '{}' claims {} bytes, only {} are left in the file", name,
-                               size, left);
-        in.seekg(size, std::ios::cur);
-    }
-    return {};
+    return walk_exr_headers(file).problem;
 }
 
 }  // namespace

@@ -124,3 +124,41 @@ TEST_CASE("input sequences: a pattern without a directory is found in the curren
     CHECK(found.frames == std::vector<int>{7, 8, 9});
     CHECK(found.files.front() == "shot.0007.exr");
 }
+
+TEST_CASE(
+    "input sequences: %d and @ find unpadded frames, %04d padded ones, whatever the directory is called")
+{
+    TempDir dir;
+    std::filesystem::create_directory(dir.file("a (v2)+"));
+    auto write = [&](const std::string& name) {
+        testkit::write_exr(dir.file("a (v2)+/" + name), {}, 1, [](int, int, int, int) { return 1.0f; });
+    };
+    for (const char* name :
+         {"u.1.exr", "u.2.exr", "u.10.exr", "u.007.exr", "u.0008.exr", "u.x9.exr", "u.-3.exr"})
+        write(name);
+    std::filesystem::create_directory(dir.file("a (v2)+/u.11.exr")); // a directory is not a frame
+    io::FrameSequence unpadded = io::scan_input_sequence(dir.file("a (v2)+/u.%d.exr"));
+    CHECK(unpadded.frames == std::vector<int>{-3, 1, 2, 10});
+    CHECK(unpadded.files[2] == dir.file("a (v2)+/u.2.exr"));
+    CHECK(io::scan_input_sequence(dir.file("a (v2)+/u.@.exr")).frames == std::vector<int>{-3, 1, 2, 10});
+    CHECK(io::scan_input_sequence(dir.file("a (v2)+/u.%03d.exr")).frames == std::vector<int>{7});
+    CHECK(io::scan_input_sequence(dir.file("a (v2)+/u.####.exr")).frames == std::vector<int>{8});
+    CHECK(io::find_input_sequence(dir.file("a (v2)+/u.%d.exr"), "1-2").files.back() ==
+          dir.file("a (v2)+/u.2.exr"));
+    // Four digits, or more for a larger frame, as the pattern writes it.
+    write("u.12345.exr");
+    CHECK(io::scan_input_sequence(dir.file("a (v2)+/u.%04d.exr")).frames == std::vector<int>{8, 12345});
+}
+
+TEST_CASE("input sequences: %d without a directory, and a literal %% beside it")
+{
+    TempDir dir;
+    for (const char* name : {"f%.3.exr", "f%.4.exr"})
+        testkit::write_exr(dir.file(name), {}, 1, [](int, int, int, int) { return 1.0f; });
+    std::string previous = std::filesystem::current_path().string();
+    std::filesystem::current_path(dir.path());
+    io::FrameSequence found = io::find_input_sequence("f%%.%d.exr");
+    std::filesystem::current_path(previous);
+    CHECK(found.frames == std::vector<int>{3, 4});
+    CHECK(found.files.front() == "f%.3.exr");
+}

@@ -217,6 +217,15 @@ TEST_CASE("info, compare and refine: damaged and missing frames exit with their 
         {"info " + dir.file(damaged_name(0) + ".####.exr"), 1, damaged_name(0) + ".0003.exr: empty file (0 bytes)"},
         {"info " + dir.file(damaged_name(1) + ".####.exr"), 1, damaged_name(1) + ".0003.exr: cannot read image header"},
         {"info " + dir.file(damaged_name(2) + ".####.exr"), 1, damaged_name(2) + ".0003.exr: damaged header: attribute"},
+        // Cut or damaged after the header: the chunk offset table against the file size.
+        {"info " + dir.file(damaged_name(3) + ".####.exr"), 1,
+         damaged_name(3) + ".0003.exr: truncated: the file ends inside its chunk offset table"},
+        {"info " + dir.file(damaged_name(4) + ".####.exr"), 1,
+         damaged_name(4) + ".0003.exr: damaged chunk offset table: 1 of 1 chunks point past the end"},
+        {"info " + dir.file(damaged_name(6) + ".####.exr"), 1, damaged_name(6) + ".0003.exr: truncated: the last chunk"},
+        // Damaged data in a file of the right size: only decoding finds it.
+        {"info " + dir.file(damaged_name(5) + ".####.exr") + " --check", 1,
+         damaged_name(5) + ".0003.exr: cannot decode rows 0-7"},
         {"info " + in + " --frames 0-3", 1, "in.0000.exr: frame 0 is missing"},
         {"info " + in + " --json " + dir.path(), 1, dir.path()},
         {"compare " + dir.file(damaged_name(5) + ".####.exr") + " " + in + " -q", 4, damaged_name(5) + ".0003.exr"},
