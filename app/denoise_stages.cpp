@@ -146,8 +146,7 @@ StageRun::StageRun(const StageOptions& options, const CLI::App& command)
         throw usage_error(fmt::format("--stage {} needs the survey files of the shot: --survey FILE...", name));
     if (stage == denoise::Stage::Write && options.modes.empty() && !in_memory)
         throw usage_error("--stage write needs the modes files of the shot: --modes FILE...");
-    for (const char* option :
-         {"--report", "--save-modes", "--rank-map", "--segments", "--train-frames", "--estimators"})
+    for (const char* option : {"--report", "--save-modes", "--rank-map", "--segments", "--train-frames"})
         if (command.count(option) > 0)
             throw usage_error(fmt::format("--stage cannot be combined with {}: run it on one machine", option));
     if (command.count("--non-negative-mode") > 0 &&

@@ -53,7 +53,7 @@ void add_method_options(CLI::App& command, MethodOptions& options)
         "everywhere), input (the cleaned input), spatial (Gaussian blurs of the input, 1 and 2 px). The "
         "rebuild "
         "is kept unless another's risk (SURE, 7x7) is lower by 2 standard errors; sigma is then the chosen "
-        "value's estimated error. Not with --stage or --rank-map yet");
+        "value's estimated error. Not with --rank-map yet");
 }
 
 void apply_training_frames(const MethodOptions& options, const std::vector<int>& frame_numbers,

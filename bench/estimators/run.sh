@@ -26,6 +26,7 @@ for shot in sweep_room spin_room; do
             "$modestack" denoise "$cycles/$shot/spp4/frame.####.exr" -o "$out/frame.####.exr" --layer "$layer" \
                 --json "$out.json" > "$out.log" 2>&1 || { cat "$out.log"; exit 1; }
         choice=$work/choice/$shot-$layer
+        mkdir -p "$work/choice"
         [ -f "$choice/frame.0048.exr" ] ||
             "$modestack" denoise "$cycles/$shot/spp4/frame.####.exr" -o "$choice/frame.####.exr" --layer "$layer" \
                 --estimators rebuild,input,spatial --json "$choice.json" > "$choice.log" 2>&1 ||

@@ -1,16 +1,20 @@
 #include "core/denoise/estimator_choice.h"
 
+#include "core/common/avx2_clones.h"
 #include "core/common/error.h"
 
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <tuple>
 
 namespace modestack::denoise {
 namespace {
 
 constexpr std::array<double, 2> kGaussWidths{1.0, 2.0}; // pixels
-constexpr int kGaussReach = 6;                          // ⌈3 × the widest⌉
+constexpr std::array<int, 2> kGaussReaches{3, 6};       // ⌈3 × width⌉
+constexpr int kGaussReach = 6;                          // the widest
+constexpr int kStripRows = 32; // rows chosen at once: bounds the planes, whatever the frame's height
 
 // A plane of `depth` floats per pixel over image rows [begin, end).
 struct Plane {
@@ -19,7 +23,7 @@ struct Plane {
     void reset(int first, int last, int plane_width, int plane_depth)
     {
         begin = first, end = last, width = plane_width, depth = plane_depth;
-        values.assign(static_cast<size_t>(end - begin) * width * depth, 0.0f);
+        values.resize(static_cast<size_t>(end - begin) * width * depth); // every producer writes every value
     }
     float* row(int y) { return values.data() + static_cast<std::int64_t>(y - begin) * width * depth; }
     const float* row(int y) const
@@ -30,93 +34,141 @@ struct Plane {
 
 // The mean over the (2r+1)² window around each pixel of rows [first, last),
 // clipped to the image (the source must hold every image row the window reads).
-void box_mean(const Plane& source, int height, int radius, int first, int last, Plane& result,
-              std::vector<float>& scratch)
+// Running sums in double, in a fixed order: O(1) per value, the same bits on
+// every run.
+MODESTACK_AVX2_CLONES void box_mean(const Plane& source, int height, int radius, int first, int last,
+                                    Plane& result, std::vector<float>& horizontal,
+                                    std::vector<double>& column)
 {
     const int width = source.width, depth = source.depth;
+    const std::int64_t row_values = static_cast<std::int64_t>(width) * depth;
     const int top = std::max(0, first - radius), bottom = std::min(height, last + radius);
-    scratch.assign(static_cast<size_t>(bottom - top) * width * depth, 0.0f);
-    for (int y = top; y < bottom; ++y) { // horizontal means
+    horizontal.resize(static_cast<size_t>((bottom - top) * row_values)); // every value written below
+    for (int y = top; y < bottom; ++y) {
         const float* in = source.row(y);
-        float* out = scratch.data() + static_cast<std::int64_t>(y - top) * width * depth;
-        for (int x = 0; x < width; ++x) {
-            const int x0 = std::max(0, x - radius), x1 = std::min(width - 1, x + radius);
-            for (int c = 0; c < depth; ++c) {
-                double sum = 0;
-                for (int q = x0; q <= x1; ++q)
-                    sum += in[q * depth + c];
+        float* out = horizontal.data() + (y - top) * row_values;
+        for (int c = 0; c < depth; ++c) {
+            double sum = 0;
+            for (int q = 0; q <= std::min(width - 1, radius); ++q)
+                sum += in[q * depth + c];
+            for (int x = 0; x < width; ++x) {
+                const int x0 = std::max(0, x - radius), x1 = std::min(width - 1, x + radius);
                 out[x * depth + c] = static_cast<float>(sum / (x1 - x0 + 1));
+                if (x + radius + 1 < width)
+                    sum += in[(x + radius + 1) * depth + c];
+                if (x - radius >= 0)
+                    sum -= in[(x - radius) * depth + c];
             }
         }
     }
     result.reset(first, last, width, depth);
-    for (int y = first; y < last; ++y) { // vertical means
-        const int y0 = std::max(0, y - radius), y1 = std::min(height - 1, y + radius);
+    column.assign(static_cast<size_t>(row_values), 0.0);
+    for (int q = top; q <= std::min(height - 1, first + radius); ++q)
+        for (std::int64_t i = 0; i < row_values; ++i)
+            column[static_cast<size_t>(i)] += horizontal[static_cast<size_t>((q - top) * row_values + i)];
+    for (int y = first; y < last; ++y) {
+        const int count = std::min(height - 1, y + radius) - std::max(0, y - radius) + 1;
         float* out = result.row(y);
-        for (std::int64_t i = 0; i < static_cast<std::int64_t>(width) * depth; ++i) {
-            double sum = 0;
-            for (int q = y0; q <= y1; ++q)
-                sum += scratch[static_cast<size_t>((q - top) * static_cast<std::int64_t>(width) * depth + i)];
-            out[i] = static_cast<float>(sum / (y1 - y0 + 1));
+        for (std::int64_t i = 0; i < row_values; ++i)
+            out[i] = static_cast<float>(column[static_cast<size_t>(i)] / count);
+        if (y + 1 == last)
+            break;
+        const float* entering =
+            y + radius + 1 < height ? horizontal.data() + (y + radius + 1 - top) * row_values : nullptr;
+        const float* leaving =
+            y - radius >= 0 ? horizontal.data() + (y - radius - top) * row_values : nullptr;
+        for (std::int64_t i = 0; i < row_values; ++i) {
+            if (entering)
+                column[static_cast<size_t>(i)] += entering[i];
+            if (leaving)
+                column[static_cast<size_t>(i)] -= leaving[i];
         }
     }
 }
 
-// A Gaussian of width `s` truncated at kGaussReach and renormalised inside the
+// A Gaussian of width `s` truncated at `reach` and renormalised inside the
 // image along one axis: per position, the weights' sum, the centre weight and
 // the sum of squared weights (each over the weights inside).
 struct AxisKernel {
+    int reach = 0;
     std::vector<double> taps; // taps[k + reach]
     std::vector<double> sum, centre, squares;
 };
 
-AxisKernel axis_kernel(double s, int size)
+AxisKernel axis_kernel(double s, int reach, int size)
 {
     AxisKernel kernel;
-    for (int k = -kGaussReach; k <= kGaussReach; ++k)
+    kernel.reach = reach;
+    for (int k = -reach; k <= reach; ++k)
         kernel.taps.push_back(std::exp(-0.5 * k * k / (s * s)));
     kernel.sum.resize(size), kernel.centre.resize(size), kernel.squares.resize(size);
     for (int i = 0; i < size; ++i) {
         double sum = 0, squares = 0;
-        for (int k = std::max(-kGaussReach, -i); k <= std::min(kGaussReach, size - 1 - i); ++k)
-            sum += kernel.taps[k + kGaussReach],
-                squares += kernel.taps[k + kGaussReach] * kernel.taps[k + kGaussReach];
+        for (int k = std::max(-reach, -i); k <= std::min(reach, size - 1 - i); ++k)
+            sum += kernel.taps[k + reach], squares += kernel.taps[k + reach] * kernel.taps[k + reach];
         kernel.sum[i] = sum;
-        kernel.centre[i] = kernel.taps[kGaussReach] / sum;
+        kernel.centre[i] = kernel.taps[reach] / sum;
         kernel.squares[i] = squares / (sum * sum);
     }
     return kernel;
 }
 
-// The Gaussian blur of the input over rows [first, last).
-void gauss_blur(const ChoiceFrame& frame, const AxisKernel& along_x, const AxisKernel& along_y, int first,
-                int last, Plane& result, std::vector<float>& scratch)
+// The Gaussian blur of the input over rows [first, last). Each value sums its
+// taps in the same order whether it lies inside or at the edge (the inner loops
+// run over contiguous samples, so that they vectorise).
+MODESTACK_AVX2_CLONES void gauss_blur(const ChoiceFrame& frame, const AxisKernel& along_x,
+                                      const AxisKernel& along_y, int first, int last, Plane& result,
+                                      std::vector<float>& scratch, std::vector<double>& sums)
 {
     const int width = frame.image.width, height = frame.image.height, channels = frame.image.channels;
-    const int top = std::max(0, first - kGaussReach), bottom = std::min(height, last + kGaussReach);
+    const int reach = along_y.reach;
+    const int top = std::max(0, first - reach), bottom = std::min(height, last + reach);
     const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
-    scratch.assign(static_cast<size_t>((bottom - top) * row_samples), 0.0f);
+    scratch.resize(static_cast<size_t>((bottom - top) * row_samples)); // every value written below
+    sums.resize(static_cast<size_t>(row_samples));
     for (int y = top; y < bottom; ++y) {
         const float* in = frame.input + (y - frame.input_begin) * row_samples;
         float* out = scratch.data() + (y - top) * row_samples;
-        for (int x = 0; x < width; ++x)
+        // Pixels [reach, width − reach) see every tap.
+        const int inner_begin = std::min(reach, width), inner_end = std::max(inner_begin, width - reach);
+        const std::int64_t begin = static_cast<std::int64_t>(inner_begin) * channels,
+                           end = static_cast<std::int64_t>(inner_end) * channels;
+        std::fill(sums.begin() + begin, sums.begin() + end, 0.0);
+        for (int k = -reach; k <= reach; ++k) {
+            const double tap = along_x.taps[k + reach];
+            const std::int64_t shift = static_cast<std::int64_t>(k) * channels;
+            for (std::int64_t i = begin; i < end; ++i)
+                sums[static_cast<size_t>(i)] += tap * in[i + shift];
+        }
+        for (int x = inner_begin; x < inner_end; ++x)
+            for (int c = 0; c < channels; ++c)
+                out[x * channels + c] =
+                    static_cast<float>(sums[static_cast<size_t>(x * channels + c)] / along_x.sum[x]);
+        for (int x = 0; x < width; ++x) {
+            if (x == inner_begin && inner_end > inner_begin)
+                x = inner_end;
+            if (x >= width)
+                break;
             for (int c = 0; c < channels; ++c) {
                 double sum = 0;
-                for (int k = std::max(-kGaussReach, -x); k <= std::min(kGaussReach, width - 1 - x); ++k)
-                    sum += along_x.taps[k + kGaussReach] * in[(x + k) * channels + c];
+                for (int k = std::max(-reach, -x); k <= std::min(reach, width - 1 - x); ++k)
+                    sum += along_x.taps[k + reach] * in[(x + k) * channels + c];
                 out[x * channels + c] = static_cast<float>(sum / along_x.sum[x]);
             }
+        }
     }
     result.reset(first, last, width, channels);
     for (int y = first; y < last; ++y) {
-        float* out = result.row(y);
-        for (std::int64_t i = 0; i < row_samples; ++i) {
-            double sum = 0;
-            for (int k = std::max(-kGaussReach, -y); k <= std::min(kGaussReach, height - 1 - y); ++k)
-                sum += along_y.taps[k + kGaussReach] *
-                       scratch[static_cast<size_t>((y + k - top) * row_samples + i)];
-            out[i] = static_cast<float>(sum / along_y.sum[y]);
+        std::fill(sums.begin(), sums.end(), 0.0);
+        for (int k = std::max(-reach, -y); k <= std::min(reach, height - 1 - y); ++k) {
+            const double tap = along_y.taps[k + reach];
+            const float* in = scratch.data() + (y + k - top) * row_samples;
+            for (std::int64_t i = 0; i < row_samples; ++i)
+                sums[static_cast<size_t>(i)] += tap * in[i];
         }
+        float* out = result.row(y);
+        for (std::int64_t i = 0; i < row_samples; ++i)
+            out[i] = static_cast<float>(sums[static_cast<size_t>(i)] / along_y.sum[y]);
     }
 }
 
@@ -170,20 +222,30 @@ void ChoiceCounts::add(const ChoiceCounts& other)
         pixels[k] += other.pixels[k], squared_error[k] += other.squared_error[k];
 }
 
-ChoiceCounts choose_estimators(const EstimatorOptions& options, const ChoiceFrame& frame, int row, int end,
-                               float* values, float* sigma)
+namespace {
+
+// Every plane of one strip's choice, kept per thread from strip to strip (fresh
+// pages would cost the kernel's zeroing every time).
+struct Workspace {
+    Plane residual, high_pass, variance;
+    std::array<Plane, 2> blurred;
+    std::array<Plane, kEstimators> sure, sure_squared, difference, difference_squared;
+    std::array<Plane, kEstimators> sure_mean, sure_square_mean, difference_mean, difference_square_mean,
+        local_sure;
+    std::vector<float> scratch;
+    std::vector<double> column;
+};
+
+// choose_estimators for rows [row, end), one strip.
+MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options, const ChoiceFrame& frame,
+                                                int row, int end, float* values, float* sigma,
+                                                Workspace& work)
 {
     const int width = frame.image.width, height = frame.image.height, channels = frame.image.channels;
     const int radius = options.radius;
     const int window_begin = std::max(0, row - radius), window_end = std::min(height, end + radius);
     const int pass_begin = std::max(0, window_begin - radius),
               pass_end = std::min(height, window_end + radius);
-    if (frame.rebuilt_begin > std::max(0, pass_begin - 1) ||
-        frame.rebuilt_end < std::min(height, pass_end + 1) ||
-        frame.input_begin > std::max(0, window_begin - kGaussReach) ||
-        frame.input_end < std::min(height, window_end + kGaussReach) ||
-        frame.input_begin > frame.rebuilt_begin || frame.input_end < frame.rebuilt_end)
-        throw internal_error("choose_estimators: the frame's rows do not cover the choice's reach");
     const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
     auto input_at = [&](int y) { return frame.input + (y - frame.input_begin) * row_samples; };
     auto rebuilt_at = [&](int y) { return frame.rebuilt + (y - frame.rebuilt_begin) * row_samples; };
@@ -191,47 +253,59 @@ ChoiceCounts choose_estimators(const EstimatorOptions& options, const ChoiceFram
         return frame.kept_noise ? frame.kept_noise[(y - frame.rebuilt_begin) * row_samples + i]
                                 : frame.leverage;
     };
-    std::vector<float> scratch;
 
     // v: the windowed mean of the residual's squared high-pass.
-    Plane high_pass;
+    // The residual over the rows the high-pass reads, then the high-pass itself.
+    const int residual_begin = std::max(0, pass_begin - 1), residual_end = std::min(height, pass_end + 1);
+    Plane& residual = work.residual;
+    residual.reset(residual_begin, residual_end, width, channels);
+    for (int y = residual_begin; y < residual_end; ++y) {
+        const float *input = input_at(y), *rebuilt = rebuilt_at(y);
+        float* out = residual.row(y);
+        for (std::int64_t i = 0; i < row_samples; ++i)
+            out[i] = input[i] - rebuilt[i];
+    }
+    Plane& high_pass = work.high_pass;
     high_pass.reset(pass_begin, pass_end, width, channels);
     for (int y = pass_begin; y < pass_end; ++y) {
+        const float* here = residual.row(y);
+        const float* above = y > 0 ? residual.row(y - 1) : nullptr;
+        const float* below = y + 1 < height ? residual.row(y + 1) : nullptr;
         float* out = high_pass.row(y);
         for (int x = 0; x < width; ++x)
             for (int c = 0; c < channels; ++c) {
-                auto residual = [&](int yy, int xx) {
-                    const std::int64_t i = static_cast<std::int64_t>(xx) * channels + c;
-                    return static_cast<double>(input_at(yy)[i]) - rebuilt_at(yy)[i];
-                };
+                const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
                 double neighbours = 0;
                 int count = 0;
                 if (x > 0)
-                    neighbours += residual(y, x - 1), ++count;
+                    neighbours += here[i - channels], ++count;
                 if (x + 1 < width)
-                    neighbours += residual(y, x + 1), ++count;
-                if (y > 0)
-                    neighbours += residual(y - 1, x), ++count;
-                if (y + 1 < height)
-                    neighbours += residual(y + 1, x), ++count;
-                const double d = count ? residual(y, x) - neighbours / count : 0.0;
-                out[x * channels + c] = count ? static_cast<float>(d * d / (1.0 + 1.0 / count)) : 0.0f;
+                    neighbours += here[i + channels], ++count;
+                if (above)
+                    neighbours += above[i], ++count;
+                if (below)
+                    neighbours += below[i], ++count;
+                const double d = count ? here[i] - neighbours / count : 0.0;
+                out[i] = count ? static_cast<float>(d * d / (1.0 + 1.0 / count)) : 0.0f;
             }
     }
-    Plane variance;
-    box_mean(high_pass, height, radius, window_begin, window_end, variance, scratch);
+    Plane& variance = work.variance;
+    box_mean(high_pass, height, radius, window_begin, window_end, variance, work.scratch, work.column);
 
     // Each candidate's value and per-pixel SURE (channel mean) over the window rows.
     std::array<bool, kEstimators> used{true, options.input, options.spatial, options.spatial};
-    std::array<Plane, 2> blurred;
+    std::array<Plane, 2>& blurred = work.blurred;
     std::array<AxisKernel, 2> kernel_x, kernel_y;
     for (int g = 0; g < 2 && options.spatial; ++g) {
-        kernel_x[g] = axis_kernel(kGaussWidths[g], width), kernel_y[g] = axis_kernel(kGaussWidths[g], height);
-        gauss_blur(frame, kernel_x[g], kernel_y[g], window_begin, window_end, blurred[g], scratch);
+        kernel_x[g] = axis_kernel(kGaussWidths[g], kGaussReaches[g], width);
+        kernel_y[g] = axis_kernel(kGaussWidths[g], kGaussReaches[g], height);
+        gauss_blur(frame, kernel_x[g], kernel_y[g], window_begin, window_end, blurred[g], work.scratch,
+                   work.column);
     }
     // Per pixel: each candidate's SURE and its gain over the rebuild, with their
     // squares for the tests.
-    std::array<Plane, kEstimators> sure, sure_squared, difference, difference_squared;
+    auto [sure, sure_squared, difference, difference_squared] =
+        std::tie(work.sure, work.sure_squared, work.difference, work.difference_squared);
     for (int k = 0; k < kEstimators; ++k)
         if (used[k])
             for (Plane* plane : {&sure[k], &sure_squared[k], &difference[k], &difference_squared[k]})
@@ -260,16 +334,20 @@ ChoiceCounts choose_estimators(const EstimatorOptions& options, const ChoiceFram
                     difference_squared[k].row(y)[x] = static_cast<float>(d * d);
                 }
         }
-    std::array<Plane, kEstimators> sure_mean, sure_square_mean, difference_mean, difference_square_mean,
-        local_sure;
+    auto [sure_mean, sure_square_mean, difference_mean, difference_square_mean, local_sure] =
+        std::tie(work.sure_mean, work.sure_square_mean, work.difference_mean, work.difference_square_mean,
+                 work.local_sure);
+    auto box = [&](const Plane& source, int reach, Plane& result) {
+        box_mean(source, height, reach, row, end, result, work.scratch, work.column);
+    };
     for (int k = 0; k < kEstimators; ++k)
         if (used[k]) {
-            box_mean(sure[k], height, radius, row, end, sure_mean[k], scratch);
-            box_mean(sure[k], height, 1, row, end, local_sure[k], scratch);
-            box_mean(sure_squared[k], height, radius, row, end, sure_square_mean[k], scratch);
+            box(sure[k], radius, sure_mean[k]);
+            box(sure[k], 1, local_sure[k]);
+            box(sure_squared[k], radius, sure_square_mean[k]);
             if (k != 0) {
-                box_mean(difference[k], height, radius, row, end, difference_mean[k], scratch);
-                box_mean(difference_squared[k], height, radius, row, end, difference_square_mean[k], scratch);
+                box(difference[k], radius, difference_mean[k]);
+                box(difference_squared[k], radius, difference_square_mean[k]);
             }
         }
 
@@ -331,6 +409,28 @@ ChoiceCounts choose_estimators(const EstimatorOptions& options, const ChoiceFram
             ++counts.pixels[chosen];
         }
     }
+    return counts;
+}
+
+} // namespace
+
+ChoiceCounts choose_estimators(const EstimatorOptions& options, const ChoiceFrame& frame, int row, int end,
+                               float* values, float* sigma)
+{
+    const int height = frame.image.height, reach = estimator_rebuilt_reach(options);
+    if (frame.rebuilt_begin > std::max(0, row - reach) || frame.rebuilt_end < std::min(height, end + reach) ||
+        frame.input_begin > std::max(0, row - estimator_input_reach(options)) ||
+        frame.input_end < std::min(height, end + estimator_input_reach(options)) ||
+        frame.input_begin > frame.rebuilt_begin || frame.input_end < frame.rebuilt_end)
+        throw internal_error("choose_estimators: the frame's rows do not cover the choice's reach");
+    thread_local Workspace work; // no task runs inside a choice, so no other choice shares it
+    const std::int64_t row_samples = static_cast<std::int64_t>(frame.image.width) * frame.image.channels;
+    ChoiceCounts counts;
+    for (int strip = row; strip < end;
+         strip += kStripRows) // strips bound the planes; the bits do not see them
+        counts.add(choose_strip(options, frame, strip, std::min(end, strip + kStripRows),
+                                values + (strip - row) * row_samples, sigma + (strip - row) * row_samples,
+                                work));
     return counts;
 }
 

@@ -11,6 +11,7 @@
 #include <tbb/parallel_for.h>
 
 #include <chrono>
+#include <cmath>
 #include <mutex>
 
 namespace modestack::denoise {
@@ -33,8 +34,6 @@ void check_task(const Settings& settings, Stage stage)
             fmt::format("--stage {}: the farm stages use the gram solver, not --method rsvd", name));
     if (!settings.training_frames.empty())
         throw internal_error(fmt::format("--stage {} cannot be combined with --train-frames", name));
-    if (settings.estimators.enabled())
-        throw internal_error(fmt::format("--stage {} cannot be combined with --estimators yet", name));
     if (stage != Stage::Statistics && stage != Stage::Solve &&
         settings.non_negative == NonNegativeMode::KeepSum)
         throw internal_error(
@@ -235,9 +234,12 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     context.progress.begin(fmt::format("writing {} of {} frames", written.size(), shape.frames),
                            static_cast<std::int64_t>(written.size()));
     struct Buffers {
-        std::vector<float> noisy, unfiltered, kept_noise, sigma, output;
+        std::vector<float> noisy, unfiltered, kept_noise, sigma, output, raw, chosen, chosen_sigma;
         PassThroughRows pass_through;
     };
+    const EstimatorOptions& estimators = settings.estimators;
+    if (estimators.enabled())
+        report.estimator_choice.assign(static_cast<size_t>(shape.frames), {});
     tbb::enumerable_thread_specific<Buffers> thread_buffers;
     std::mutex counts_mutex;
     tbb::parallel_for(0, static_cast<int>(written.size()), [&](int k) {
@@ -248,8 +250,13 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
              {&buffers.noisy, &buffers.unfiltered, &buffers.kept_noise, &buffers.sigma, &buffers.output})
             buffer->resize(static_cast<size_t>(samples));
         context.source.read_rows(t, 0, shape.height, buffers.noisy.data(), &buffers.pass_through);
-        for (const ModeImages::Patch& patch : shot.patches[static_cast<size_t>(t)])
+        if (estimators.enabled()) // the choice judges the input as read, its NaN/Inf cleaned
+            buffers.raw = buffers.noisy;
+        for (const ModeImages::Patch& patch : shot.patches[static_cast<size_t>(t)]) {
             buffers.noisy[static_cast<size_t>(patch.sample)] = patch.value;
+            if (estimators.enabled() && !std::isfinite(buffers.raw[static_cast<size_t>(patch.sample)]))
+                buffers.raw[static_cast<size_t>(patch.sample)] = patch.value;
+        }
         lowrank::rebuild_from_coefficients({shot.residual.data(), samples, shot.residual_modes, samples},
                                            modes.temporal_rank.row(t),
                                            {buffers.unfiltered.data(), samples, 1, samples});
@@ -269,8 +276,24 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             std::lock_guard<std::mutex> lock(counts_mutex);
             report.non_negative += counts;
         }
-        context.sink.write_rows(t, 0, shape.height, output.data(), buffers.sigma.data(),
-                                &buffers.pass_through);
+        if (estimators.enabled()) { // the whole frame at once: every row the choice reads is here
+            ChoiceFrame frame;
+            frame.image = image;
+            frame.input = buffers.raw.data(), frame.input_begin = 0, frame.input_end = shape.height;
+            frame.rebuilt = output.data(), frame.sigma = buffers.sigma.data();
+            frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr;
+            frame.leverage = modes.leverages(t);
+            frame.rebuilt_begin = 0, frame.rebuilt_end = shape.height;
+            buffers.chosen.resize(static_cast<size_t>(samples)),
+                buffers.chosen_sigma.resize(static_cast<size_t>(samples));
+            report.estimator_choice[static_cast<size_t>(t)] = choose_estimators(
+                estimators, frame, 0, shape.height, buffers.chosen.data(), buffers.chosen_sigma.data());
+            context.sink.write_rows(t, 0, shape.height, buffers.chosen.data(), buffers.chosen_sigma.data(),
+                                    &buffers.pass_through);
+        } else {
+            context.sink.write_rows(t, 0, shape.height, output.data(), buffers.sigma.data(),
+                                    &buffers.pass_through);
+        }
         context.progress.advance(1);
     });
     context.progress.end();

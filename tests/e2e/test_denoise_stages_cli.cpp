@@ -247,8 +247,6 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
         {in + "--stage merge -o " + dir.file("out/x.stats"), 2, "--stage 'merge'"},
         {in + "--stage stats --rows 1/2 --report r.html -o " + dir.file("out/x.stats"), 2,
          "cannot be combined with --report"},
-        {in + "--stage stats --rows 1/2 --estimators input -o " + dir.file("out/x.stats"), 2,
-         "cannot be combined with --estimators"},
     };
     for (const Case& c : cases) {
         CAPTURE(c.arguments);
