@@ -288,6 +288,8 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                 buffers.chosen_sigma.resize(static_cast<size_t>(samples));
             report.estimator_choice[static_cast<size_t>(t)] = choose_estimators(
                 estimators, frame, 0, shape.height, buffers.chosen.data(), buffers.chosen_sigma.data());
+            clamp_chosen_values(buffers.chosen.data(), samples, settings.non_negative,
+                                settings.non_negative_floor);
             context.sink.write_rows(t, 0, shape.height, buffers.chosen.data(), buffers.chosen_sigma.data(),
                                     &buffers.pass_through);
         } else {

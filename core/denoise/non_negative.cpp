@@ -82,4 +82,15 @@ NonNegativeCounts make_non_negative(lowrank::MutableBandView band, NonNegativeMo
     return total;
 }
 
+std::int64_t clamp_chosen_values(float* values, std::int64_t count, NonNegativeMode mode, float floor)
+{
+    if (mode == NonNegativeMode::Off)
+        return 0;
+    std::int64_t changed = 0;
+    for (std::int64_t i = 0; i < count; ++i)
+        if (values[i] < floor)
+            values[i] = floor, ++changed;
+    return changed;
+}
+
 } // namespace modestack::denoise

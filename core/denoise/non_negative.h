@@ -43,4 +43,9 @@ struct NonNegativeCounts {
 /// independent: the result does not depend on the thread count.
 NonNegativeCounts make_non_negative(lowrank::MutableBandView band, NonNegativeMode mode, float floor);
 
+/// Sets the `count` values below `floor` to it, unless `mode` is Off: the
+/// estimator choice's values (estimator_choice.h) come from the input too, which
+/// the correction of the rebuild never saw. Returns how many it changed.
+std::int64_t clamp_chosen_values(float* values, std::int64_t count, NonNegativeMode mode, float floor);
+
 } // namespace modestack::denoise

@@ -172,6 +172,7 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
             values.resize(static_cast<size_t>(own)), chosen_sigma.resize(static_cast<size_t>(own));
             report.estimator_choice[static_cast<size_t>(frame)].add(
                 choose_estimators(estimators, choice_frame, row, end, values.data(), chosen_sigma.data()));
+            clamp_chosen_values(values.data(), own, settings.non_negative, settings.non_negative_floor);
             context.sink.write_rows(frame, row, end, values.data(), chosen_sigma.data(), pass_through);
         });
         if (context.sink.wants_modes())

@@ -11,6 +11,7 @@
 #include <doctest/doctest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -244,4 +245,23 @@ TEST_CASE("estimators: streamed and kept shots, 1 and 2 threads give the same bi
     const Run single = run_with(std::int64_t(1) << 30, 1);
     CHECK(single.sink.rebuilt == whole.sink.rebuilt);
     CHECK(single.sink.sigma == whole.sink.sigma);
+}
+
+TEST_CASE("estimators: with --non-negative no chosen value is negative, though the input has negatives")
+{
+    std::vector<std::vector<float>> truth;
+    MemoryShot shot = wall_shot(16, 3, -1, 0.1f, 6, truth);
+    for (std::vector<float>& frame : shot.frames) // dark: the noise dips below zero
+        for (float& value : frame)
+            value = 0.1f * value - 0.05f;
+    Settings settings = choice_settings();
+    settings.non_negative = NonNegativeMode::Clamp;
+    const Run chosen = run(shot, settings);
+    bool input_negative = false;
+    for (const std::vector<float>& frame : shot.frames)
+        input_negative |= *std::min_element(frame.begin(), frame.end()) < 0.0f;
+    REQUIRE(input_negative);
+    CHECK(share(chosen.report, Estimator::Rebuild) < 1.0); // something else was taken somewhere
+    for (const std::vector<float>& frame : chosen.sink.rebuilt)
+        CHECK(*std::min_element(frame.begin(), frame.end()) >= 0.0f);
 }
