@@ -94,7 +94,8 @@ Subcommand add_compare_command(CLI::App& parent)
         "compare",
         "Compare a sequence with a reference like idiff: relMSE, PSNR, errors, flicker; pass/warn/fail");
     command
-        ->add_option("SEQ_A", options->test, "Sequence under test: name.####.exr, name.%04d.exr, name.@.exr")
+        ->add_option("SEQ_A", options->test,
+                     "Sequence under test: name.####.exr, name.%04d.exr, name.%d.exr (unpadded), name.@.exr")
         ->required();
     command->add_option("SEQ_B", options->reference, "Reference sequence; must hold every frame of SEQ_A")
         ->required();

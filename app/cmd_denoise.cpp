@@ -40,7 +40,9 @@ Subcommand add_denoise_command(CLI::App& parent)
     DenoiseCommandOptions* options = &command_options->options;
     CLI::App* command = parent.add_subcommand(
         "denoise", "Denoise the selected layers of an EXR sequence with its temporal low-rank modes");
-    command->add_option("SEQ", options->input, "Input frame sequence: name.####.exr, name.%04d.exr, name.@.exr")
+    command
+        ->add_option("SEQ", options->input,
+                     "Input frame sequence: name.####.exr, name.%04d.exr, name.%d.exr (unpadded), name.@.exr")
         ->required();
     command->add_option("-o,--output", options->output,
                         "Output frame sequence (never an input); with --stage stats or solve, the task's file")
