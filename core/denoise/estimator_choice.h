@@ -10,16 +10,21 @@
 // derivative at the sample is w = ∂f/∂y (its divergence), SURE
 //   S = (f − y)² − v + 2·v·w
 // is an unbiased estimate of (f − x)². w is the rebuild's kept noise h (the
-// leverage, or what the mode filter keeps), a Gaussian's centre weight, 1 for the
-// input (S = v). v is the windowed mean of the squared 4-neighbour high-pass of
-// the residual y − rebuild, divided by 1 + 1/k for k neighbours: a mean (not a
-// median), so that v is the variance of the very samples SURE sees.
+// leverage; under the mode filter its kept-noise gain Σ V²·Σa² stands in for the
+// divergence Σ V²·a_pp, which it is below: a known simplification), a
+// Gaussian's centre weight, 1 for the input (S = v). y is the input as read (NaN/Inf cleaned, not fireflies: the
+// temporal firefly clamp hides the rebuild's errors where the light moves). v is
+// the windowed mean of the squared 4-neighbour high-pass of the residual
+// y − rebuild, divided by 1 + 1/k for k neighbours: a mean (not a median), so
+// that v is the variance of the very samples SURE sees.
 //
 // The rebuild is kept unless another estimator's pooled SURE is lower by more
 // than z standard errors of the window mean of the per-pixel difference. SURE of
 // a strong denoiser is a small difference of two large noisy numbers; an argmin
 // would pick by chance wherever risks are close (measured in
-// bench/results/estimators.md: it made the indirect light 2–3× worse).
+// bench/results/estimators.md: it made the indirect light 2–3× worse). Of the
+// estimators that pass, the one with the least SURE over the 3×3 pixels around
+// is taken (the narrow window sees a blur's bias at an edge).
 // Sigma of the chosen estimator is its known variance part (the rebuild: the
 // engine's sigma²; a Gaussian: v·Σw²; the input: v), raised to its pooled SURE
 // where that is larger by z standard errors (the bias the variance part misses).
