@@ -286,10 +286,8 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             frame.rebuilt_begin = 0, frame.rebuilt_end = shape.height;
             buffers.chosen.resize(static_cast<size_t>(samples)),
                 buffers.chosen_sigma.resize(static_cast<size_t>(samples));
-            report.estimator_choice[static_cast<size_t>(t)] = choose_estimators(
-                estimators, frame, 0, shape.height, buffers.chosen.data(), buffers.chosen_sigma.data());
-            clamp_chosen_values(buffers.chosen.data(), samples, settings.non_negative,
-                                settings.non_negative_floor);
+            report.estimator_choice[static_cast<size_t>(t)] = choose_frame_rows(
+                settings, frame, 0, shape.height, buffers.chosen.data(), buffers.chosen_sigma.data());
             context.sink.write_rows(t, 0, shape.height, buffers.chosen.data(), buffers.chosen_sigma.data(),
                                     &buffers.pass_through);
         } else {

@@ -92,6 +92,12 @@ Survey unfiltered_survey(const Solution& solution);
 RebuildBasis chosen_modes(const Settings& settings, const ShotShape& shape, const Solution& solution,
                           const Survey& survey, Report& report);
 
+/// The estimator choice of rows [row, end) of one frame (estimator_choice.h),
+/// with --non-negative's floor applied to the chosen values: pass 2 of a whole
+/// run and a farm's write task alike.
+ChoiceCounts choose_frame_rows(const Settings& settings, const ChoiceFrame& frame, int row, int end,
+                               float* values, float* sigma);
+
 /// What pass 2 reports besides the outputs.
 struct RebuildReport {
     NonNegativeCounts non_negative;

@@ -3,7 +3,8 @@
 // say), its sigma, and the rows handed to the sink; the spatial modes and the
 // rank map when the sink or the settings ask for them.
 // chosen_modes, which every rebuild starts from (a farm's modes and write
-// tasks too), lives here beside it.
+// tasks too), and choose_frame_rows, which a farm's write task shares, live
+// here beside it.
 #include "core/denoise/passes.h"
 
 #include "core/lowrank/projection.h"
@@ -44,6 +45,16 @@ RebuildBasis chosen_modes(const Settings& settings, const ShotShape& shape, cons
     report.shrinkage = modes.shrinkage;
     report.weight_smoothing = modes.weight_smoothing;
     return modes;
+}
+
+ChoiceCounts choose_frame_rows(const Settings& settings, const ChoiceFrame& frame, int row, int end,
+                               float* values, float* sigma)
+{
+    const ChoiceCounts counts = choose_estimators(settings.estimators, frame, row, end, values, sigma);
+    const std::int64_t samples =
+        static_cast<std::int64_t>(frame.image.width) * frame.image.channels * (end - row);
+    clamp_chosen_values(values, samples, settings.non_negative, settings.non_negative_floor);
+    return counts;
 }
 
 RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const RunPlan& plan,
@@ -157,6 +168,7 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
                                         pass_through);
                 return;
             }
+            // Made again rather than kept from sigma's loop: one frame per worker, not every frame's.
             std::vector<float>& kept_noise = kept_noise_of_worker.local();
             if (filter)
                 kept_noise_of(frame, kept_noise);
@@ -171,8 +183,7 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
             auto& [values, chosen_sigma] = chosen_of_worker.local();
             values.resize(static_cast<size_t>(own)), chosen_sigma.resize(static_cast<size_t>(own));
             report.estimator_choice[static_cast<size_t>(frame)].add(
-                choose_estimators(estimators, choice_frame, row, end, values.data(), chosen_sigma.data()));
-            clamp_chosen_values(values.data(), own, settings.non_negative, settings.non_negative_floor);
+                choose_frame_rows(settings, choice_frame, row, end, values.data(), chosen_sigma.data()));
             context.sink.write_rows(frame, row, end, values.data(), chosen_sigma.data(), pass_through);
         });
         if (context.sink.wants_modes())
