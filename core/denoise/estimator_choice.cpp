@@ -14,7 +14,7 @@ namespace {
 constexpr std::array<double, 2> kGaussWidths{1.0, 2.0}; // pixels
 constexpr std::array<int, 2> kGaussReaches{3, 6};       // ⌈3 × width⌉
 constexpr int kGaussReach = 6;                          // the widest
-constexpr int kStripRows = 32; // rows chosen at once: bounds the planes, whatever the frame's height
+constexpr int kStripRows = 64; // rows chosen at once: bounds the planes, whatever the frame's height
 
 // A plane of `depth` floats per pixel over image rows [begin, end).
 struct Plane {
@@ -34,8 +34,9 @@ struct Plane {
 
 // The mean over the (2r+1)² window around each pixel of rows [first, last),
 // clipped to the image (the source must hold every image row the window reads).
-// Running sums in double, in a fixed order: O(1) per value, the same bits on
-// every run.
+// Along a row each value sums its window directly (independent sums that
+// vectorise; a running sum is one long chain of dependent additions); down the
+// columns running sums. In double, in a fixed order: the same bits on every run.
 MODESTACK_AVX2_CLONES void box_mean(const Plane& source, int height, int radius, int first, int last,
                                     Plane& result, std::vector<float>& horizontal,
                                     std::vector<double>& column)
@@ -44,43 +45,57 @@ MODESTACK_AVX2_CLONES void box_mean(const Plane& source, int height, int radius,
     const std::int64_t row_values = static_cast<std::int64_t>(width) * depth;
     const int top = std::max(0, first - radius), bottom = std::min(height, last + radius);
     horizontal.resize(static_cast<size_t>((bottom - top) * row_values)); // every value written below
+    column.resize(static_cast<size_t>(row_values));
+    // Pixels [inner_begin, inner_end) see the whole window along the row.
+    const int inner_begin = std::min(radius, width), inner_end = std::max(inner_begin, width - radius);
+    const double inner_count = 2 * radius + 1;
     for (int y = top; y < bottom; ++y) {
         const float* in = source.row(y);
         float* out = horizontal.data() + (y - top) * row_values;
-        for (int c = 0; c < depth; ++c) {
-            double sum = 0;
-            for (int q = 0; q <= std::min(width - 1, radius); ++q)
-                sum += in[q * depth + c];
-            for (int x = 0; x < width; ++x) {
-                const int x0 = std::max(0, x - radius), x1 = std::min(width - 1, x + radius);
+        const std::int64_t begin = static_cast<std::int64_t>(inner_begin) * depth,
+                           end = static_cast<std::int64_t>(inner_end) * depth;
+        std::fill(column.begin() + begin, column.begin() + end, 0.0);
+        for (int k = -radius; k <= radius; ++k) {
+            const float* shifted = in + static_cast<std::int64_t>(k) * depth;
+            for (std::int64_t i = begin; i < end; ++i)
+                column[static_cast<size_t>(i)] += shifted[i];
+        }
+        for (std::int64_t i = begin; i < end; ++i)
+            out[i] = static_cast<float>(column[static_cast<size_t>(i)] / inner_count);
+        for (int x = 0; x < width; ++x) {
+            if (x == inner_begin && inner_end > inner_begin)
+                x = inner_end;
+            if (x >= width)
+                break;
+            const int x0 = std::max(0, x - radius), x1 = std::min(width - 1, x + radius);
+            for (int c = 0; c < depth; ++c) {
+                double sum = 0;
+                for (int q = x0; q <= x1; ++q)
+                    sum += in[q * depth + c];
                 out[x * depth + c] = static_cast<float>(sum / (x1 - x0 + 1));
-                if (x + radius + 1 < width)
-                    sum += in[(x + radius + 1) * depth + c];
-                if (x - radius >= 0)
-                    sum -= in[(x - radius) * depth + c];
             }
         }
     }
     result.reset(first, last, width, depth);
-    column.assign(static_cast<size_t>(row_values), 0.0);
+    std::fill(column.begin(), column.end(), 0.0);
     for (int q = top; q <= std::min(height - 1, first + radius); ++q)
         for (std::int64_t i = 0; i < row_values; ++i)
             column[static_cast<size_t>(i)] += horizontal[static_cast<size_t>((q - top) * row_values + i)];
     for (int y = first; y < last; ++y) {
-        const int count = std::min(height - 1, y + radius) - std::max(0, y - radius) + 1;
+        const double count = std::min(height - 1, y + radius) - std::max(0, y - radius) + 1;
         float* out = result.row(y);
         for (std::int64_t i = 0; i < row_values; ++i)
             out[i] = static_cast<float>(column[static_cast<size_t>(i)] / count);
         if (y + 1 == last)
             break;
-        const float* entering =
-            y + radius + 1 < height ? horizontal.data() + (y + radius + 1 - top) * row_values : nullptr;
-        const float* leaving =
-            y - radius >= 0 ? horizontal.data() + (y - radius - top) * row_values : nullptr;
-        for (std::int64_t i = 0; i < row_values; ++i) {
-            if (entering)
+        if (y + radius + 1 < height) {
+            const float* entering = horizontal.data() + (y + radius + 1 - top) * row_values;
+            for (std::int64_t i = 0; i < row_values; ++i)
                 column[static_cast<size_t>(i)] += entering[i];
-            if (leaving)
+        }
+        if (y - radius >= 0) {
+            const float* leaving = horizontal.data() + (y - radius - top) * row_values;
+            for (std::int64_t i = 0; i < row_values; ++i)
                 column[static_cast<size_t>(i)] -= leaving[i];
         }
     }
@@ -113,12 +128,13 @@ AxisKernel axis_kernel(double s, int reach, int size)
     return kernel;
 }
 
-// The Gaussian blur of the input over rows [first, last). Each value sums its
-// taps in the same order whether it lies inside or at the edge (the inner loops
-// run over contiguous samples, so that they vectorise).
+// The Gaussian blur of the input over rows [first, last), in float (8 lanes a
+// step; a blur's rounding is far below the noise it averages). Each value sums
+// its taps in the same order whether it lies inside or at the edge (the inner
+// loops run over contiguous samples, so that they vectorise).
 MODESTACK_AVX2_CLONES void gauss_blur(const ChoiceFrame& frame, const AxisKernel& along_x,
                                       const AxisKernel& along_y, int first, int last, Plane& result,
-                                      std::vector<float>& scratch, std::vector<double>& sums)
+                                      std::vector<float>& scratch, std::vector<float>& sums)
 {
     const int width = frame.image.width, height = frame.image.height, channels = frame.image.channels;
     const int reach = along_y.reach;
@@ -133,42 +149,42 @@ MODESTACK_AVX2_CLONES void gauss_blur(const ChoiceFrame& frame, const AxisKernel
         const int inner_begin = std::min(reach, width), inner_end = std::max(inner_begin, width - reach);
         const std::int64_t begin = static_cast<std::int64_t>(inner_begin) * channels,
                            end = static_cast<std::int64_t>(inner_end) * channels;
-        std::fill(sums.begin() + begin, sums.begin() + end, 0.0);
+        std::fill(sums.begin() + begin, sums.begin() + end, 0.0f);
         for (int k = -reach; k <= reach; ++k) {
-            const double tap = along_x.taps[k + reach];
+            const float tap = static_cast<float>(along_x.taps[k + reach]);
             const std::int64_t shift = static_cast<std::int64_t>(k) * channels;
             for (std::int64_t i = begin; i < end; ++i)
                 sums[static_cast<size_t>(i)] += tap * in[i + shift];
         }
         for (int x = inner_begin; x < inner_end; ++x)
             for (int c = 0; c < channels; ++c)
-                out[x * channels + c] =
-                    static_cast<float>(sums[static_cast<size_t>(x * channels + c)] / along_x.sum[x]);
+                out[x * channels + c] = static_cast<float>(sums[static_cast<size_t>(x * channels + c)] /
+                                                           static_cast<float>(along_x.sum[x]));
         for (int x = 0; x < width; ++x) {
             if (x == inner_begin && inner_end > inner_begin)
                 x = inner_end;
             if (x >= width)
                 break;
             for (int c = 0; c < channels; ++c) {
-                double sum = 0;
+                float sum = 0;
                 for (int k = std::max(-reach, -x); k <= std::min(reach, width - 1 - x); ++k)
-                    sum += along_x.taps[k + reach] * in[(x + k) * channels + c];
-                out[x * channels + c] = static_cast<float>(sum / along_x.sum[x]);
+                    sum += static_cast<float>(along_x.taps[k + reach]) * in[(x + k) * channels + c];
+                out[x * channels + c] = sum / static_cast<float>(along_x.sum[x]);
             }
         }
     }
     result.reset(first, last, width, channels);
     for (int y = first; y < last; ++y) {
-        std::fill(sums.begin(), sums.end(), 0.0);
+        std::fill(sums.begin(), sums.end(), 0.0f);
         for (int k = std::max(-reach, -y); k <= std::min(reach, height - 1 - y); ++k) {
-            const double tap = along_y.taps[k + reach];
+            const float tap = static_cast<float>(along_y.taps[k + reach]);
             const float* in = scratch.data() + (y + k - top) * row_samples;
             for (std::int64_t i = 0; i < row_samples; ++i)
                 sums[static_cast<size_t>(i)] += tap * in[i];
         }
         float* out = result.row(y);
         for (std::int64_t i = 0; i < row_samples; ++i)
-            out[i] = static_cast<float>(sums[static_cast<size_t>(i)] / along_y.sum[y]);
+            out[i] = sums[static_cast<size_t>(i)] / static_cast<float>(along_y.sum[y]);
     }
 }
 
@@ -232,7 +248,7 @@ struct Workspace {
     std::array<Plane, kEstimators> sure, sure_squared, difference, difference_squared;
     std::array<Plane, kEstimators> sure_mean, sure_square_mean, difference_mean, difference_square_mean,
         local_sure;
-    std::vector<float> scratch;
+    std::vector<float> scratch, blur_sums;
     std::vector<double> column;
 };
 
@@ -272,7 +288,16 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
         const float* above = y > 0 ? residual.row(y - 1) : nullptr;
         const float* below = y + 1 < height ? residual.row(y + 1) : nullptr;
         float* out = high_pass.row(y);
-        for (int x = 0; x < width; ++x)
+        if (above && below) // the pixels with all four neighbours, in a loop that vectorises
+            for (std::int64_t i = channels; i < row_samples - channels; ++i) {
+                const double neighbours =
+                    static_cast<double>(here[i - channels]) + here[i + channels] + above[i] + below[i];
+                const double d = here[i] - neighbours / 4;
+                out[i] = static_cast<float>(d * d / 1.25);
+            }
+        for (int x = 0; x < width; ++x) {
+            if (above && below && x == 1 && width > 2)
+                x = width - 1;
             for (int c = 0; c < channels; ++c) {
                 const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
                 double neighbours = 0;
@@ -288,6 +313,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 const double d = count ? here[i] - neighbours / count : 0.0;
                 out[i] = count ? static_cast<float>(d * d / (1.0 + 1.0 / count)) : 0.0f;
             }
+        }
     }
     Plane& variance = work.variance;
     box_mean(high_pass, height, radius, window_begin, window_end, variance, work.scratch, work.column);
@@ -300,7 +326,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
         kernel_x[g] = axis_kernel(kGaussWidths[g], kGaussReaches[g], width);
         kernel_y[g] = axis_kernel(kGaussWidths[g], kGaussReaches[g], height);
         gauss_blur(frame, kernel_x[g], kernel_y[g], window_begin, window_end, blurred[g], work.scratch,
-                   work.column);
+                   work.blur_sums);
     }
     // Per pixel: each candidate's SURE and its gain over the rebuild, with their
     // squares for the tests.
@@ -340,15 +366,16 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     auto box = [&](const Plane& source, int reach, Plane& result) {
         box_mean(source, height, reach, row, end, result, work.scratch, work.column);
     };
-    for (int k = 0; k < kEstimators; ++k)
+    // The rebuild's local SURE is never compared, and another's pooled SURE is
+    // the rebuild's less its pooled gain.
+    box(sure[0], radius, sure_mean[0]);
+    box(sure_squared[0], radius, sure_square_mean[0]);
+    for (int k = 1; k < kEstimators; ++k)
         if (used[k]) {
-            box(sure[k], radius, sure_mean[k]);
             box(sure[k], 1, local_sure[k]);
             box(sure_squared[k], radius, sure_square_mean[k]);
-            if (k != 0) {
-                box(difference[k], radius, difference_mean[k]);
-                box(difference_squared[k], radius, difference_square_mean[k]);
-            }
+            box(difference[k], radius, difference_mean[k]);
+            box(difference_squared[k], radius, difference_square_mean[k]);
         }
 
     // The choice and its sigma at the band's own rows.
@@ -359,8 +386,9 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
         const int window_rows = std::min(height - 1, y + radius) - std::max(0, y - radius) + 1;
         for (int x = 0; x < width; ++x) {
             const int window = window_rows * (std::min(width - 1, x + radius) - std::max(0, x - radius) + 1);
-            auto standard_error = [&](double mean, double square_mean) {
-                return std::sqrt(std::max(square_mean - mean * mean, 0.0) / window);
+            // gain > z · its standard error over the window, squared (no root per pixel).
+            auto significant = [&](double gain, double mean, double square_mean) {
+                return gain > 0 && gain * gain > z * z * std::max(square_mean - mean * mean, 0.0) / window;
             };
             // The rebuild unless others beat it by z standard errors over the
             // window; of those, the one with the least SURE over the 3×3 pixels
@@ -375,7 +403,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 if (!used[k])
                     continue;
                 const double mean = difference_mean[k].row(y)[x], local = local_sure[k].row(y)[x];
-                if (mean > z * standard_error(mean, difference_square_mean[k].row(y)[x]) &&
+                if (significant(mean, mean, difference_square_mean[k].row(y)[x]) &&
                     (chosen == 0 || local < least))
                     chosen = k, least = local;
             }
@@ -391,21 +419,25 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                                : v * kernel_x[chosen - 2].squares[x] * kernel_y[chosen - 2].squares[y];
                 floor_mean += floor[c] / channels;
             }
-            const double risk = sure_mean[chosen].row(y)[x];
-            const double excess =
-                risk - floor_mean > z * standard_error(risk, sure_square_mean[chosen].row(y)[x])
-                    ? risk - floor_mean
-                    : 0;
+            const double risk =
+                sure_mean[0].row(y)[x] - (chosen == 0 ? 0.0 : difference_mean[chosen].row(y)[x]);
+            const double excess = significant(risk - floor_mean, risk, sure_square_mean[chosen].row(y)[x])
+                                      ? risk - floor_mean
+                                      : 0;
             const float* source = chosen == 0   ? rebuilt_at(y)
                                   : chosen == 1 ? input_at(y)
                                                 : blurred[chosen - 2].row(y);
             const std::int64_t out = (y - row) * row_samples + static_cast<std::int64_t>(x) * channels;
+            double pixel_squared =
+                0; // one addition to the count per pixel, not a chain through it per channel
             for (int c = 0; c < channels; ++c) {
                 values[out + c] = source[static_cast<std::int64_t>(x) * channels + c];
                 const double squared = floor[static_cast<size_t>(c)] + excess;
-                sigma[out + c] = static_cast<float>(std::sqrt(std::max(squared, 0.0)));
-                counts.squared_error[chosen] += squared;
+                sigma[out + c] =
+                    std::sqrt(static_cast<float>(std::max(squared, 0.0))); // float: the root's latency
+                pixel_squared += squared;
             }
+            counts.squared_error[chosen] += pixel_squared;
             ++counts.pixels[chosen];
         }
     }
