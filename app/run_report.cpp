@@ -40,7 +40,8 @@ void complete_report(report::ReportData& data, const std::string& scene_name, co
         std::vector<float> mask_values(mask.begin(), mask.end());
         auto at = frame.panels.begin() + std::min<std::ptrdiff_t>(2, static_cast<std::ptrdiff_t>(frame.panels.size()));
         frame.panels.insert(at, {"refined", report_panel(refined_rgb, width, height, 3, data.panel_factor)});
-        frame.panels.push_back({"refine mask", report_panel(mask_values, width, height, 1, data.panel_factor)});
+        frame.panels.push_back(
+            {"refine mask", report_panel(mask_values, width, height, 1, data.panel_factor), true});
     }
     if (!errors[0][0].empty()) {
         data.errors.push_back({"true (against the reference): denoised", errors[0][1]});

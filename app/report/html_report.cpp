@@ -149,6 +149,7 @@ Json page_data(const ReportData& data)
         for (const Panel& panel : frame.panels) {
             LogImage encoded = log_encode(panel.image);
             panels.push_back({{"label", panel.label},
+                              {"absolute", panel.absolute},
                               {"uri", png_data_uri(encoded.image)},
                               {"low", encoded.low},
                               {"high", encoded.high}});

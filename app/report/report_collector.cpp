@@ -1,8 +1,11 @@
 #include "app/report/report_collector.h"
 
+#include "core/denoise/estimator_choice.h"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -72,6 +75,11 @@ public:
         m_collector.take_sink_rows(frame_index, row_begin, row_end, rebuilt, sigma);
         m_inner.write_rows(frame_index, row_begin, row_end, rebuilt, sigma, pass_through);
     }
+    void write_choice_rows(int frame_index, int row_begin, int row_end, const std::uint8_t* chosen) override
+    {
+        m_collector.take_choice_rows(frame_index, row_begin, row_end, chosen);
+        m_inner.write_choice_rows(frame_index, row_begin, row_end, chosen);
+    }
 
 private:
     Collector& m_collector;
@@ -103,7 +111,10 @@ Collector::Collector(denoise::FrameSource& source, denoise::FrameSink& sink, Col
             m_shown_slot[index] = static_cast<int>(m_shown.size());
             shown.push_back(index);
             BoxImage image(m_shape.width, m_shape.height, m_shape.channels, m_panel_factor);
-            m_shown.push_back({image, image, BoxImage(m_shape.width, m_shape.height, 1, m_panel_factor)});
+            Shown slot{image, image, BoxImage(m_shape.width, m_shape.height, 1, m_panel_factor),
+                       BoxImage(m_shape.width, m_shape.height, 3, m_panel_factor),
+                       std::vector<bool>(static_cast<size_t>(std::max(0, m_shape.height)), false)};
+            m_shown.push_back(std::move(slot));
         }
     m_options.shown_indices = shown;
     m_source = std::make_unique<Source>(source, *this);
@@ -166,6 +177,38 @@ void Collector::take_sink_rows(int frame_index, int row_begin, int row_end, cons
     }
 }
 
+namespace {
+// The estimator map's colour of each Estimator (estimator_choice.h): the
+// rebuild grey, the input red, the 1 px and 2 px blurs green and blue.
+constexpr std::array<std::array<float, 3>, denoise::kEstimators> kEstimatorColours{
+    {{0.35f, 0.35f, 0.35f}, {1.0f, 0.0f, 0.0f}, {0.0f, 0.8f, 0.0f}, {0.0f, 0.3f, 1.0f}}};
+} // namespace
+
+const char* const kEstimatorMapLabel =
+    "estimator map (grey: rebuild, red: input, green: 1 px blur, blue: 2 px blur)";
+
+void Collector::take_choice_rows(int frame_index, int row_begin, int row_end, const std::uint8_t* chosen)
+{
+    const int slot = m_shown_slot[frame_index];
+    if (slot < 0)
+        return;
+    std::lock_guard<std::mutex> lock(m_frame_locks[frame_index]);
+    Shown& shown = m_shown[slot];
+    shown.any_chosen = true;
+    std::vector<float> colours(static_cast<size_t>(m_shape.width) * 3);
+    for (int row = row_begin; row < row_end; ++row) {
+        if (shown.rows_chosen[row])
+            continue;
+        shown.rows_chosen[row] = true;
+        for (int x = 0; x < m_shape.width; ++x) {
+            const std::uint8_t estimator = chosen[static_cast<size_t>(row - row_begin) * m_shape.width + x];
+            const auto& colour = kEstimatorColours[std::min<size_t>(estimator, denoise::kEstimators - 1)];
+            std::copy(colour.begin(), colour.end(), colours.begin() + 3 * x);
+        }
+        shown.chosen.add_row(row, colours.data());
+    }
+}
+
 std::vector<double> Collector::estimated_error() const
 {
     std::vector<double> errors(m_error_sums.size(), std::numeric_limits<double>::quiet_NaN());
@@ -212,6 +255,8 @@ std::vector<ShownFrame> Collector::shown_frames(const std::vector<int>& frame_nu
         frame.panels.push_back({"noisy", m_shown[k].noisy.mean()});
         frame.panels.push_back({"denoised", m_shown[k].denoised.mean()});
         frame.panels.push_back({"sigma", m_shown[k].sigma.mean()});
+        if (m_shown[k].any_chosen)
+            frame.panels.push_back({kEstimatorMapLabel, m_shown[k].chosen.mean(), true});
         frames.push_back(std::move(frame));
     }
     return frames;

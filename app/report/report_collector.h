@@ -54,6 +54,9 @@ private:
 /// The box size that makes `width` at most `largest` pixels wide (at least 1).
 int box_factor(int width, int largest);
 
+/// The label of the panel that shows which estimator each pixel was taken from.
+extern const char* const kEstimatorMapLabel;
+
 /// Keeps what the report needs while the engine runs between source() and sink().
 class Collector {
 public:
@@ -79,10 +82,14 @@ public:
     /// Called by the decorators.
     void take_source_rows(int frame_index, int row_begin, int row_end, const float* rows);
     void take_sink_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma);
+    void take_choice_rows(int frame_index, int row_begin, int row_end, const std::uint8_t* chosen);
 
 private:
     struct Shown {
         BoxImage noisy, denoised, sigma;
+        BoxImage chosen;               // the estimator map's colours
+        std::vector<bool> rows_chosen; // taken already
+        bool any_chosen = false;
     };
     class Source;
     class Sink;

@@ -22,8 +22,11 @@ struct LinearImage {
 
 /// One image of the side-by-side row of a shown frame.
 struct Panel {
-    std::string label;       ///< "noisy", "denoised", "refined", "sigma", "refine mask"
+    std::string label; ///< "noisy", "denoised", "refined", "sigma", "refine mask", "estimator map"
     LinearImage image;
+    /// Shown as it is, not through the exposure slider: masks and maps, whose
+    /// values are codes in [0, 1], not light.
+    bool absolute = false;
 };
 
 /// A frame shown side by side and in the rank slider.

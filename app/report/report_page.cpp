@@ -168,7 +168,7 @@ async function start() {
       const imageData = await decode(panel.uri);
       const canvas = document.createElement('canvas');
       canvas.width = imageData.width; canvas.height = imageData.height;
-      const mask = panel.label.indexOf('mask') >= 0;
+      const mask = panel.absolute;
       const offset = panel.label === 'sigma' ? Math.round((reference.high - panel.high) * 2) / 2 : 0;
       views.push({canvas, pixels: toFloat(imageData, logTable(panel.low, panel.high)), width: imageData.width,
                   height: imageData.height, offset, mask});

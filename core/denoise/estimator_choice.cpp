@@ -255,7 +255,7 @@ struct Workspace {
 // choose_estimators for rows [row, end), one strip.
 MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options, const ChoiceFrame& frame,
                                                 int row, int end, float* values, float* sigma,
-                                                Workspace& work)
+                                                std::uint8_t* chosen_of_pixel, Workspace& work)
 {
     const int width = frame.image.width, height = frame.image.height, channels = frame.image.channels;
     const int radius = options.radius;
@@ -438,6 +438,8 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 pixel_squared += squared;
             }
             counts.squared_error[chosen] += pixel_squared;
+            chosen_of_pixel[static_cast<std::int64_t>(y - row) * width + x] =
+                static_cast<std::uint8_t>(chosen);
             ++counts.pixels[chosen];
         }
     }
@@ -447,7 +449,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
 } // namespace
 
 ChoiceCounts choose_estimators(const EstimatorOptions& options, const ChoiceFrame& frame, int row, int end,
-                               float* values, float* sigma)
+                               float* values, float* sigma, std::uint8_t* chosen)
 {
     const int height = frame.image.height, reach = estimator_rebuilt_reach(options);
     if (frame.rebuilt_begin > std::max(0, row - reach) || frame.rebuilt_end < std::min(height, end + reach) ||
@@ -462,7 +464,7 @@ ChoiceCounts choose_estimators(const EstimatorOptions& options, const ChoiceFram
          strip += kStripRows) // strips bound the planes; the bits do not see them
         counts.add(choose_strip(options, frame, strip, std::min(end, strip + kStripRows),
                                 values + (strip - row) * row_samples, sigma + (strip - row) * row_samples,
-                                work));
+                                chosen + static_cast<std::int64_t>(strip - row) * frame.image.width, work));
     return counts;
 }
 

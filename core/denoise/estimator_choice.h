@@ -89,10 +89,11 @@ struct ChoiceCounts {
 };
 
 /// Writes rows [row, end) of the chosen values and their sigma (laid out like
-/// the frame's rows) and returns what was chosen. `frame`'s rebuilt rows must
+/// the frame's rows) and the Estimator taken at each pixel (one byte a pixel),
+/// and returns what was chosen. `frame`'s rebuilt rows must
 /// cover [row, end) ± estimator_rebuilt_reach and its input rows ± input reach
 /// (clipped to the image). Deterministic: a function of those rows only.
 ChoiceCounts choose_estimators(const EstimatorOptions& options, const ChoiceFrame& frame, int row, int end,
-                               float* values, float* sigma);
+                               float* values, float* sigma, std::uint8_t* chosen);
 
 } // namespace modestack::denoise

@@ -235,6 +235,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                            static_cast<std::int64_t>(written.size()));
     struct Buffers {
         std::vector<float> noisy, unfiltered, kept_noise, sigma, output, raw, chosen, chosen_sigma;
+        std::vector<std::uint8_t> chosen_estimators; // per pixel
         PassThroughRows pass_through;
     };
     const EstimatorOptions& estimators = settings.estimators;
@@ -286,10 +287,13 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             frame.rebuilt_begin = 0, frame.rebuilt_end = shape.height;
             buffers.chosen.resize(static_cast<size_t>(samples)),
                 buffers.chosen_sigma.resize(static_cast<size_t>(samples));
-            report.estimator_choice[static_cast<size_t>(t)] = choose_frame_rows(
-                settings, frame, 0, shape.height, buffers.chosen.data(), buffers.chosen_sigma.data());
+            buffers.chosen_estimators.resize(static_cast<size_t>(image.width) * image.height);
+            report.estimator_choice[static_cast<size_t>(t)] =
+                choose_frame_rows(settings, frame, 0, shape.height, buffers.chosen.data(),
+                                  buffers.chosen_sigma.data(), buffers.chosen_estimators.data());
             context.sink.write_rows(t, 0, shape.height, buffers.chosen.data(), buffers.chosen_sigma.data(),
                                     &buffers.pass_through);
+            context.sink.write_choice_rows(t, 0, shape.height, buffers.chosen_estimators.data());
         } else {
             context.sink.write_rows(t, 0, shape.height, output.data(), buffers.sigma.data(),
                                     &buffers.pass_through);

@@ -140,6 +140,13 @@ public:
     {
         (void)row_begin, (void)row_end, (void)ranks;
     }
+    /// Rows [row_begin, row_end) of frame `frame_index`: the Estimator
+    /// (estimator_choice.h) each pixel's values were taken from, one per pixel.
+    /// Called after write_rows of the same rows, only when the run chooses.
+    virtual void write_choice_rows(int frame_index, int row_begin, int row_end, const std::uint8_t* chosen)
+    {
+        (void)frame_index, (void)row_begin, (void)row_end, (void)chosen;
+    }
 };
 
 /// A FrameSink that hands everything on to another unchanged (see ForwardingSource).
@@ -161,6 +168,10 @@ public:
     void write_rank_rows(int row_begin, int row_end, const float* ranks) override
     {
         m_inner.write_rank_rows(row_begin, row_end, ranks);
+    }
+    void write_choice_rows(int frame_index, int row_begin, int row_end, const std::uint8_t* chosen) override
+    {
+        m_inner.write_choice_rows(frame_index, row_begin, row_end, chosen);
     }
 
 protected:

@@ -96,7 +96,7 @@ RebuildBasis chosen_modes(const Settings& settings, const ShotShape& shape, cons
 /// with --non-negative's floor applied to the chosen values: pass 2 of a whole
 /// run and a farm's write task alike.
 ChoiceCounts choose_frame_rows(const Settings& settings, const ChoiceFrame& frame, int row, int end,
-                               float* values, float* sigma);
+                               float* values, float* sigma, std::uint8_t* chosen);
 
 /// What pass 2 reports besides the outputs.
 struct RebuildReport {

@@ -48,9 +48,10 @@ RebuildBasis chosen_modes(const Settings& settings, const ShotShape& shape, cons
 }
 
 ChoiceCounts choose_frame_rows(const Settings& settings, const ChoiceFrame& frame, int row, int end,
-                               float* values, float* sigma)
+                               float* values, float* sigma, std::uint8_t* chosen)
 {
-    const ChoiceCounts counts = choose_estimators(settings.estimators, frame, row, end, values, sigma);
+    const ChoiceCounts counts =
+        choose_estimators(settings.estimators, frame, row, end, values, sigma, chosen);
     const std::int64_t samples =
         static_cast<std::int64_t>(frame.image.width) * frame.image.channels * (end - row);
     clamp_chosen_values(values, samples, settings.non_negative, settings.non_negative_floor);
@@ -87,7 +88,11 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
     // --estimators: rows around each band are rebuilt too, for the choice's windows.
     const EstimatorOptions& estimators = settings.estimators;
     const int reach = estimator_rebuilt_reach(estimators);
-    tbb::enumerable_thread_specific<std::pair<std::vector<float>, std::vector<float>>> chosen_of_worker;
+    struct Chosen {
+        std::vector<float> values, sigma;
+        std::vector<std::uint8_t> estimators; // per pixel
+    };
+    tbb::enumerable_thread_specific<Chosen> chosen_of_worker;
     ScratchBuffer<float> raw; // the input rows the choice reads, as the source gives them
     const int input_reach = estimator_input_reach(estimators);
     if (estimators.enabled())
@@ -180,11 +185,14 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
             choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;
             choice_frame.leverage = modes.leverages(frame);
             choice_frame.rebuilt_begin = first, choice_frame.rebuilt_end = last;
-            auto& [values, chosen_sigma] = chosen_of_worker.local();
-            values.resize(static_cast<size_t>(own)), chosen_sigma.resize(static_cast<size_t>(own));
+            Chosen& chosen = chosen_of_worker.local();
+            chosen.values.resize(static_cast<size_t>(own)), chosen.sigma.resize(static_cast<size_t>(own));
+            chosen.estimators.resize(static_cast<size_t>(shape.width) * (end - row));
             report.estimator_choice[static_cast<size_t>(frame)].add(
-                choose_frame_rows(settings, choice_frame, row, end, values.data(), chosen_sigma.data()));
-            context.sink.write_rows(frame, row, end, values.data(), chosen_sigma.data(), pass_through);
+                choose_frame_rows(settings, choice_frame, row, end, chosen.values.data(), chosen.sigma.data(),
+                                  chosen.estimators.data()));
+            context.sink.write_rows(frame, row, end, chosen.values.data(), chosen.sigma.data(), pass_through);
+            context.sink.write_choice_rows(frame, row, end, chosen.estimators.data());
         });
         if (context.sink.wants_modes())
             write_spatial_modes(context.sink, shape, rebuilder.coefficients(), data, solution, kept_modes,

@@ -95,6 +95,10 @@ public:
     {
         m_inner.write_rows(m_segment.first + frame_index, row_begin, row_end, rebuilt, sigma, pass_through);
     }
+    void write_choice_rows(int frame_index, int row_begin, int row_end, const std::uint8_t* chosen) override
+    {
+        m_inner.write_choice_rows(m_segment.first + frame_index, row_begin, row_end, chosen);
+    }
 
 private:
     FrameSink& m_inner;

@@ -158,3 +158,41 @@ TEST_CASE("the estimated error is the mean of sigma squared over value squared p
     CHECK(std::isnan(errors[0]));
     CHECK(errors[1] == doctest::Approx(0.05 * 0.05 / (0.3 * 0.3 + 0.01)));
 }
+
+TEST_CASE("the estimator map of a shown frame colours each pixel by its estimator, box-averaged, once a row")
+{
+    MemorySource source(6, 4, 3, 0.0f);
+    NullSink sink;
+    CollectorOptions options;
+    options.panel_width = 3; // boxes of 2 × 2 pixels
+    options.shown_indices = {1};
+    Collector collector(source, sink, options);
+    // Without choice rows there is no map.
+    CHECK(collector.shown_frames({1, 2, 3})[0].panels.size() == 3);
+    // Rows 0-1: the left box all rebuild, the middle box half input, the right box all 2 px blur.
+    const std::vector<std::uint8_t> top{0, 0, 0, 1, 3, 3, //
+                                        0, 0, 0, 1, 3, 3};
+    const std::vector<std::uint8_t> bottom(12, 2); // rows 2-3: the 1 px blur
+    collector.sink().write_choice_rows(1, 0, 2, top.data());
+    collector.sink().write_choice_rows(1, 0, 2, bottom.data()); // a second write of the same rows is ignored
+    collector.sink().write_choice_rows(1, 2, 4, bottom.data());
+    collector.sink().write_choice_rows(0, 0, 2, bottom.data()); // a frame not shown
+    const std::vector<Panel> panels = collector.shown_frames({1, 2, 3})[0].panels;
+    REQUIRE(panels.size() == 4);
+    CHECK(panels[3].label == kEstimatorMapLabel);
+    CHECK(panels[3].absolute);
+    const LinearImage& map = panels[3].image;
+    REQUIRE(map.width == 3);
+    REQUIRE(map.height == 2);
+    auto pixel = [&](int x, int y, int c) {
+        return map.rgb[(static_cast<size_t>(y) * map.width + x) * 3 + c];
+    };
+    CHECK(pixel(0, 0, 0) == doctest::Approx(0.35)); // rebuild: grey
+    CHECK(pixel(0, 0, 1) == doctest::Approx(0.35));
+    CHECK(pixel(1, 0, 0) == doctest::Approx((2 * 0.35 + 2 * 1.0) / 4)); // half rebuild, half input (red)
+    CHECK(pixel(1, 0, 1) == doctest::Approx(2 * 0.35 / 4));
+    CHECK(pixel(2, 0, 2) == doctest::Approx(1.0)); // 2 px blur: blue
+    CHECK(pixel(2, 0, 0) == doctest::Approx(0.0));
+    for (int x = 0; x < 3; ++x)
+        CHECK(pixel(x, 1, 1) == doctest::Approx(0.8)); // 1 px blur: green
+}

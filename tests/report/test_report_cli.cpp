@@ -73,6 +73,23 @@ TEST_CASE("denoise --report writes one self-contained page with the slider's mod
     CHECK(summary["temporal_modes"].size() == static_cast<size_t>(kept_modes));
 }
 
+TEST_CASE("denoise --report with --estimators adds each shown frame's estimator map, shown as it is")
+{
+    TempDir dir;
+    std::string input = make_shot(dir, 20);
+    auto result = run_modestack("denoise " + input + " -o " + dir.file("out/d.####.exr") +
+                                " --estimators rebuild,input,spatial --report " + dir.file("r.html") + " -q");
+    REQUIRE_MESSAGE(result.exit_code == 0, result.err);
+    nlohmann::json page = page_data(read_text(dir.file("r.html")));
+    REQUIRE(page["frames"].size() == 3);
+    for (const auto& frame : page["frames"]) {
+        REQUIRE(frame["panels"].size() == 4);
+        CHECK(frame["panels"][3]["label"].get<std::string>().rfind("estimator map", 0) == 0);
+        CHECK(frame["panels"][3]["absolute"] == true);
+        CHECK(frame["panels"][1]["absolute"] == false); // light goes through the exposure slider
+    }
+}
+
 TEST_CASE("denoise --report with --segments shows each part and marks the cut")
 {
     TempDir dir;

@@ -1,0 +1,91 @@
+#!/usr/bin/python3
+"""Scores denoised shots of one layer against a reference, counting the
+reference's own noise (scenes.sh).
+
+The reference is the mean of two renders with other seeds, A and B; per pixel
+n = box3((A − B)² / 4) estimates the variance of that mean, so that
+E[(x − ref)²] = (x − truth)² + n. relMSE = mean((x − ref)² − n) / (ref² + 0.01),
+the same denominator as `modestack compare`. Sigma is checked against the error
+it should bound plus the reference's noise: ratios of |x − ref| to
+sqrt(σ² + n). With one reference (B = none) n = 0.
+
+Printed per shot: the noisy input, a 1.5 px Gaussian of it, and each denoised
+sequence: relMSE shot-wide, as a multiple of the input's, its worst frame's
+multiple, the transient region's (--transient FIRST-LAST: the pixels of those
+frames whose reference differs from its temporal median), the share of frames
+worse than the input; sigma: RMS(err)/RMS(σ), median(|err|/σ)/0.6745, share
+beyond 3σ, recall of the 1 % largest errors in the 10 % largest σ.
+
+  scenes.py NOISY_PATTERN REF_A_PATTERN REF_B_PATTERN|none LAYER DENOISED_PATTERN...
+            [--transient FIRST-LAST]
+"""
+import argparse
+import os
+import sys
+
+import numpy as np
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from prototype import box, gauss, read_shot, transient_mask  # noqa: E402
+
+
+def relative(squared, ref):
+    return squared / (ref ** 2 + 0.01)
+
+
+def score(name, x, sigma, ref, noise, noisy_rel, transient, frames_noisy):
+    e2 = (x - ref) ** 2
+    rel = relative(e2 - noise, ref)
+    shot = rel.mean()
+    per_frame = rel.mean((1, 2, 3))
+    line = (f"  {name:24s} relMSE {shot:.5f} = {shot / noisy_rel.mean():.2f}x input, worst frame "
+            f"{(per_frame / frames_noisy).max():.2f}x, frames worse {(per_frame > frames_noisy).mean() * 100:.0f} %")
+    if transient is not None:
+        line += f", transient {rel[transient].mean() / noisy_rel[transient].mean():.2f}x"
+    if sigma is not None:
+        total = np.sqrt(sigma ** 2 + noise)
+        ratio = np.sqrt(e2) / np.maximum(total, 1e-12)
+        top = np.sqrt(e2).ravel() >= np.quantile(np.sqrt(e2), 0.99)
+        high = sigma.ravel() >= np.quantile(sigma, 0.90)
+        line += (f" | sigma rms {np.sqrt(max((e2 - noise).mean(), 0) / (sigma ** 2).mean()):.2f}, median "
+                 f"{np.median(ratio) / 0.6745:.2f}, >3s {(ratio > 3).mean() * 100:.1f} %, recall "
+                 f"{(top & high).sum() / top.sum():.2f}")
+    return line
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument('noisy'), parser.add_argument('ref_a'), parser.add_argument('ref_b')
+    parser.add_argument('layer'), parser.add_argument('denoised', nargs='+')
+    parser.add_argument('--transient', help='FIRST-LAST: frames whose changing pixels are scored apart')
+    args = parser.parse_args()
+    noisy = read_shot(args.noisy, args.layer)
+    a = read_shot(args.ref_a, args.layer)
+    if args.ref_b != 'none':
+        b = read_shot(args.ref_b, args.layer)
+        ref = (a + b) / 2
+        noise = box((a - b) ** 2 / 4, 1)
+    else:
+        ref, noise = a, np.zeros_like(a)
+    transient = None
+    if args.transient:
+        first, last = (int(f) for f in args.transient.split('-'))
+        transient = transient_mask(ref, first, last)
+    noisy_rel = relative((noisy - ref) ** 2 - noise, ref)
+    frames_noisy = noisy_rel.mean((1, 2, 3))
+    print(f"  reference noise: {relative(noise, ref).mean():.5f} relMSE "
+          f"({relative(noise, ref).mean() / noisy_rel.mean() * 100:.1f} % of the input's)")
+    print(score('input', noisy, None, ref, noise, noisy_rel, transient, frames_noisy))
+    print(score('gauss 1.5 px', gauss(noisy, 1.5)[0], None, ref, noise, noisy_rel, transient, frames_noisy))
+    for pattern in args.denoised:
+        x = read_shot(pattern, args.layer)
+        try:
+            sigma = read_shot(pattern, args.layer + '.sigma')
+        except Exception:  # noqa: BLE001 - a run without sigma is scored without it
+            sigma = None
+        name = pattern.split('/')[-2]
+        print(score(name, x, sigma, ref, noise, noisy_rel, transient, frames_noisy))
+
+
+if __name__ == '__main__':
+    main()
