@@ -186,6 +186,9 @@ void check_object_space_options(const DenoiseCommandOptions& options)
         refuse("--segments", "the points are denoised as one shot");
     if (options.method_options.transform != "none")
         refuse("--transform", "the points are denoised as baked");
+    if (options.method_options.estimators != "auto" &&
+        denoise::parse_estimators(options.method_options.estimators).enabled())
+        refuse("--estimators", "the choice blurs image neighbours, which points do not have");
 }
 
 DenoiseResult denoise_object_space(const DenoiseJob& job, const denoise::Settings& settings,
@@ -233,6 +236,9 @@ DenoiseJob make_denoise_job(const DenoiseCommandOptions& options, const CLI::App
     DenoiseJob job;
     job.settings = make_settings(options);
     job.transform = apply_method_options(options.method_options, job.settings);
+    if (!options.object_space
+             .empty()) // the points have no image neighbours to blur (auto; a list is refused above)
+        job.settings.estimators = {};
     job.input = options.input;
     job.output = options.output;
     job.layers = options.layers;

@@ -49,11 +49,11 @@ void add_method_options(CLI::App& command, MethodOptions& options)
         "<layer>Var, e.g. DiffIndVar), on, off");
     command.add_option(
         "--estimators", options.estimators,
-        "Estimators each pixel may take, comma-separated: rebuild (the default, alone: the temporal rebuild "
-        "everywhere), input (the cleaned input), spatial (Gaussian blurs of the input, 1 and 2 px). The "
-        "rebuild "
-        "is kept unless another's risk (SURE, 7x7) is lower by 2 standard errors; sigma is then the chosen "
-        "value's estimated error. Not with --rank-map yet");
+        "Estimators each pixel may take, comma-separated: rebuild (the temporal rebuild), input (the input "
+        "as read), spatial (Gaussian blurs of the input, 1 and 2 px); 'rebuild' alone turns the choice off. "
+        "The rebuild is kept unless another's risk (SURE, 7x7) is lower by 2 standard errors; sigma is the "
+        "chosen value's estimated error. Default auto: rebuild,input,spatial, but the rebuild alone with "
+        "--rank-map (its map is of the rebuild) and --object-space (no image neighbours)");
 }
 
 void apply_training_frames(const MethodOptions& options, const std::vector<int>& frame_numbers,
@@ -134,7 +134,11 @@ denoise::Transform apply_method_options(const MethodOptions& options, denoise::S
     if (settings.optimal_shrinkage && settings.mode_filter.enabled)
         throw usage_error(
             "--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
-    settings.estimators = denoise::parse_estimators(options.estimators);
+    // auto: the choice wherever it can run (it measured better than the rebuild
+    // alone on every shot of bench/results/estimators.md).
+    settings.estimators = options.estimators != "auto" ? denoise::parse_estimators(options.estimators)
+                          : settings.rank_map.enabled  ? denoise::EstimatorOptions{}
+                                                       : denoise::parse_estimators("rebuild,input,spatial");
     if (settings.estimators.enabled() && settings.rank_map.enabled)
         throw usage_error(
             "--estimators cannot be combined with --rank-map yet: the map is of the rebuild alone");

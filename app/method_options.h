@@ -30,7 +30,9 @@ struct MethodOptions {
     bool weight_smoothing = false;    ///< --weight-smoothing (the default anyway)
     bool no_weight_smoothing = false; ///< --no-weight-smoothing
     std::string whiten = "auto"; ///< auto, on or off
-    std::string estimators = "rebuild"; ///< comma-separated: rebuild, input, spatial
+    /// "auto" (every estimator where the choice can run), or comma-separated:
+    /// rebuild, input, spatial
+    std::string estimators = "auto";
 };
 
 /// Adds the options to `command`.

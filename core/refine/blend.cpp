@@ -11,6 +11,14 @@ void blend_refined(const float* weights, std::size_t pixels, int channels, const
         double w = weights[p];
         if (!(w > 0))
             continue;
+        double denoised_variance = 0, rendered_mean_variance = 0;
+        for (int c = 0; c < channels; ++c) {
+            const std::size_t i = p * channels + c;
+            denoised_variance += static_cast<double>(sigma[i]) * sigma[i];
+            rendered_mean_variance += std::fmax(0.0, rendered_variance[i]);
+        }
+        if (denoised_variance + rendered_mean_variance > 0)
+            w *= denoised_variance / (denoised_variance + rendered_mean_variance);
         for (int c = 0; c < channels; ++c) {
             std::size_t i = p * channels + c;
             double old_sigma = sigma[i];

@@ -1,16 +1,23 @@
 // Putting re-rendered values into a denoised layer: a convex blend by the
-// feathered weight, and the error estimate that goes with it. The denoised and
-// the re-rendered values are independent estimates of the same pixel, so the
-// blend's variance is w²·Var(rendered) + (1 − w)²·sigma²; the renderer measures
-// Var(rendered) itself (DiffIndVar = the sample variance divided by spp). Pixels
-// with weight 0 keep their values bit for bit.
+// feathered weight times the inverse-variance share of the re-render, and the
+// error estimate that goes with it. The denoised and the re-rendered values are
+// independent estimates of the same pixel, so the blend's variance is
+// w²·Var(rendered) + (1 − w)²·sigma²; it is least at w = sigma² / (sigma² +
+// Var(rendered)), which never makes the pixel worse than either estimate: a
+// re-render noisier than the denoised value (a pixel the per-pixel estimator
+// choice already took well) counts for little. The renderer measures
+// Var(rendered) itself (DiffIndVar = the sample variance divided by spp). The
+// share is per pixel (channel means), so that a pixel's hue is blended as one.
+// Pixels with weight 0 keep their values bit for bit.
 #pragma once
 
 #include <cstddef>
 
 namespace modestack::refine {
 
-/// For each of `pixels` pixels with weights[p] > 0 and each of `channels` channels:
+/// For each of `pixels` pixels with weights[p] > 0, w = weights[p] · s / (s + r)
+/// (s, r: the pixel's channel means of sigma² and rendered_variance; w =
+/// weights[p] where both are 0), and each of `channels` channels:
 ///   value ← w·rendered + (1 − w)·value,
 ///   sigma ← sqrt(w²·rendered_variance + (1 − w)²·sigma²).
 /// Pixels with weight 0 are not touched. Arrays are interleaved pixels × channels.

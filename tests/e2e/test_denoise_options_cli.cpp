@@ -160,7 +160,9 @@ TEST_CASE("denoise --non-negative: no negative value, the changes are counted")
 {
     TempDir dir;
     testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
-    std::string input = "denoise " + dir.file("in.####.exr") + " -q --no-mode-filter --rank 1 ";
+    // The rebuild alone: the count is of the rebuild's negatives.
+    std::string input =
+        "denoise " + dir.file("in.####.exr") + " -q --no-mode-filter --rank 1 --estimators rebuild ";
     REQUIRE(run_modestack(input + "-o " + dir.file("off/d.####.exr")).exit_code == 0);
     std::vector<float> off = all_values(dir.file("off/d.%04d.exr"));
     const auto negatives = std::count_if(off.begin(), off.end(), [](float v) { return v < 0; });
@@ -412,6 +414,8 @@ TEST_CASE("denoise --rank-map: one 'rank' channel, never below N, summarised in 
     REQUIRE_MESSAGE(result.exit_code == 0, result.err);
     std::vector<float> ranks = testkit::read_channels(dir.file("rank.exr"), {"rank"});
     REQUIRE(ranks.size() == std::size_t(kWidth) * kHeight);
+    // The default estimators (auto) are the rebuild alone with a rank map: its map is of the rebuild.
+    CHECK(load_json(dir.file("s.json"))["method"]["estimators"]["set"] == nlohmann::json::array({"rebuild"}));
     auto summary = load_json(dir.file("s.json"))["rank_map"];
     const int largest = summary["largest_rank"].get<int>();
     CHECK(largest >= 2);
@@ -445,9 +449,9 @@ TEST_CASE("denoise --estimators: a shadow that sweeps comes out better than the 
         dir.file("in.%04d.exr"), all_frames(), layout(),
         [&](int frame, int x, int y, int c) { return truth(frame, x, y, c) + noise(frame, x, y, c); });
     const std::string input = "denoise " + dir.file("in.####.exr") + " -q ";
-    auto plain = run_modestack(input + "-o " + dir.file("plain/d.####.exr"));
+    auto plain = run_modestack(input + "--estimators rebuild -o " + dir.file("plain/d.####.exr"));
     REQUIRE_MESSAGE(plain.exit_code == 0, plain.err);
-    auto chosen = run_modestack(input + "--estimators rebuild,input,spatial --json " + dir.file("s.json") +
+    auto chosen = run_modestack(input + "--json " + dir.file("s.json") + // the default: every estimator
                                 " -o " + dir.file("chosen/d.####.exr"));
     REQUIRE_MESSAGE(chosen.exit_code == 0, chosen.err);
     auto error = [&](const std::string& pattern) { return shot_mse(pattern, truth); };

@@ -117,6 +117,12 @@ TEST_CASE("object space: bad inputs and option combinations give one line")
                                 dir.file("p.####.exr") + " -q -o " + dir.file("o.bin"));
     CHECK(staged.exit_code == 2);
     CHECK(staged.err.find("--object-space cannot be combined with --stage") != std::string::npos);
+    auto chosen =
+        run_modestack("denoise " + dir.file("g.####.exr") + " --layer DiffInd --estimators rebuild,spatial " +
+                      "--object-space " + dir.file("p.####.exr") + " -q -o " + dir.file("o.####.exr"));
+    CHECK(chosen.exit_code ==
+          2); // the default (auto) is the rebuild alone there; a list asking for more is refused
+    CHECK(chosen.err.find("--object-space cannot be combined with --estimators") != std::string::npos);
     auto count_alone = run_modestack("render --scene static --frames 1 --size 8x8 --point-count 100 -q -o " +
                                      dir.file("h.####.exr"));
     CHECK(count_alone.exit_code == 2);

@@ -67,7 +67,9 @@ RefineSettings settings_for_test()
 
 } // namespace
 
-TEST_CASE("refine_frame replaces the unsure block by the high-spp render and blends its border")
+TEST_CASE("refine_frame blends the high-spp render into the unsure block by its inverse-variance share, "
+          "feathered at "
+          "its border")
 {
     FakeDenoised before = fake_denoised(), after = before;
     RefineSettings settings = settings_for_test();
@@ -80,17 +82,28 @@ TEST_CASE("refine_frame replaces the unsure block by the high-spp render and ble
     int full = 0, partial = 0, untouched = 0;
     for (size_t p = 0; p < weights.size(); ++p) {
         float w = weights[p];
+        // The render's share: the feather times s / (s + r), the channel means of the variances (blend.h).
+        double s = 0, r = 0;
+        for (int c = 0; c < 3; ++c) {
+            s += double(before.sigma[p * 3 + c]) * before.sigma[p * 3 + c];
+            r += std::max(0.0f, reference.indirect_variance.pixels[p * 3 + c]);
+        }
+        const double share = s + r > 0 ? w * s / (s + r) : w;
+        if (before.sigma[p * 3] == 1.0f)
+            CHECK(share >
+                  0.5); // the unsure block is mostly the render; its confident ring stays mostly itself
         for (int c = 0; c < 3; ++c) {
             size_t i = p * 3 + c;
             if (w == 0.0f) {
                 CHECK(std::memcmp(&after.value[i], &before.value[i], sizeof(float)) == 0);
                 CHECK(after.sigma[i] == before.sigma[i]);
-            } else if (w == 1.0f) {
-                CHECK(after.value[i] == reference.diffuse_indirect.pixels[i]);
-                CHECK(after.sigma[i] == doctest::Approx(std::sqrt(reference.indirect_variance.pixels[i])));
             } else {
-                CHECK(after.value[i] ==
-                      doctest::Approx(w * reference.diffuse_indirect.pixels[i] + (1 - w) * before.value[i]));
+                const double variance = std::max(0.0f, reference.indirect_variance.pixels[i]);
+                CHECK(after.value[i] == doctest::Approx(share * reference.diffuse_indirect.pixels[i] +
+                                                        (1 - share) * before.value[i]));
+                CHECK(after.sigma[i] == doctest::Approx(std::sqrt(share * share * variance +
+                                                                  (1 - share) * (1 - share) *
+                                                                      before.sigma[i] * before.sigma[i])));
             }
         }
         (w == 0.0f ? untouched : w == 1.0f ? full : partial) += 1;

@@ -66,19 +66,20 @@ TEST_CASE("denoise --report writes one self-contained page with the slider's mod
     CHECK(page["segments"][0]["rank"] == kept_modes);
     CHECK(page["segments"][0]["modes"].size() == std::min(std::max(2 * kept_modes, 8), 19));
     CHECK(page["frames"].size() == 3);
-    for (const auto& frame : page["frames"])
-        CHECK(frame["panels"].size() == 3);
+    for (const auto& frame : page["frames"]) // noisy, denoised, sigma and the estimator map
+        CHECK(frame["panels"].size() == 4);
     CHECK(html.find(summary["rank"]["reasoning"].get<std::string>().substr(0, 20)) != std::string::npos);
     // Without --report nothing else changes: the JSON's kept temporal modes are N.
     CHECK(summary["temporal_modes"].size() == static_cast<size_t>(kept_modes));
 }
 
-TEST_CASE("denoise --report with --estimators adds each shown frame's estimator map, shown as it is")
+TEST_CASE(
+    "denoise --report maps each shown frame's estimators, shown as it is, and not with the rebuild alone")
 {
     TempDir dir;
     std::string input = make_shot(dir, 20);
-    auto result = run_modestack("denoise " + input + " -o " + dir.file("out/d.####.exr") +
-                                " --estimators rebuild,input,spatial --report " + dir.file("r.html") + " -q");
+    auto result = run_modestack("denoise " + input + " -o " + dir.file("out/d.####.exr") + " --report " +
+                                dir.file("r.html") + " -q");
     REQUIRE_MESSAGE(result.exit_code == 0, result.err);
     nlohmann::json page = page_data(read_text(dir.file("r.html")));
     REQUIRE(page["frames"].size() == 3);
@@ -88,6 +89,11 @@ TEST_CASE("denoise --report with --estimators adds each shown frame's estimator 
         CHECK(frame["panels"][3]["absolute"] == true);
         CHECK(frame["panels"][1]["absolute"] == false); // light goes through the exposure slider
     }
+    auto alone = run_modestack("denoise " + input + " -o " + dir.file("alone/d.####.exr") +
+                               " --estimators rebuild --report " + dir.file("alone.html") + " -q");
+    REQUIRE_MESSAGE(alone.exit_code == 0, alone.err);
+    for (const auto& frame : page_data(read_text(dir.file("alone.html")))["frames"])
+        CHECK(frame["panels"].size() == 3);
 }
 
 TEST_CASE("denoise --report with --segments shows each part and marks the cut")
@@ -138,7 +144,11 @@ TEST_CASE("run writes report.html next to its outputs, with refined frames and r
     std::vector<std::string> labels;
     for (const auto& panel : page["frames"][0]["panels"])
         labels.push_back(panel["label"]);
-    CHECK(labels == std::vector<std::string>{"noisy", "denoised", "refined", "sigma", "refine mask"});
+    REQUIRE(labels.size() == 6);
+    CHECK(std::vector<std::string>(labels.begin(), labels.begin() + 4) ==
+          std::vector<std::string>{"noisy", "denoised", "refined", "sigma"});
+    CHECK(labels[4].rfind("estimator map", 0) == 0);
+    CHECK(labels[5] == "refine mask");
     CHECK(html.find("true (against the reference)") != std::string::npos);
     nlohmann::json summary = nlohmann::json::parse(read_text(dir.file("run/summary.json")));
     CHECK(summary["outputs"]["report"] == dir.file("run/report.html"));
