@@ -29,16 +29,22 @@ std::string attribute_value(const std::string& typed_value)
     return value;
 }
 
-// The first header attribute rule of `renderer` that `header` meets, or "".
-std::string attribute_evidence(const RendererConvention& renderer, const io::FrameHeader& header)
+// The first header attribute of `header` that a name rule of `renderer` matches
+// (`values`: a value rule, weaker evidence, asked only when no renderer's name rule matched), or "".
+std::string attribute_evidence(const RendererConvention& renderer, const io::FrameHeader& header, bool values)
 {
     for (const auto& [name, typed_value] : header.attributes) {
-        for (const std::string& pattern : renderer.detect_attributes)
-            if (matches(pattern, name))
-                return fmt::format("header attribute {}", name);
+        if (!values) {
+            for (const std::string& pattern : renderer.detect_attributes)
+                if (matches(pattern, name))
+                    return fmt::format("header attribute {}", name);
+            continue;
+        }
+        const std::string value = attribute_value(typed_value);
         for (const AttributeValueRule& rule : renderer.detect_values)
-            if (matches(rule.attribute, name) && matches(rule.value, attribute_value(typed_value)))
-                return fmt::format("header attribute {} = {}", name, attribute_value(typed_value));
+            if (matches(rule.attribute, name) && matches(rule.value, value))
+                return fmt::format("header attribute {} = {}", name,
+                                   value.size() > 40 ? value.substr(0, 40) + "..." : value);
     }
     return {};
 }
@@ -134,13 +140,14 @@ RendererChoice choose_renderer(const ConventionTable& table, const std::string& 
         choice.detected_by = fmt::format("--renderer {}", requested);
         return choice;
     }
-    for (const RendererConvention& renderer : table.renderers)
-        if (std::string evidence = attribute_evidence(renderer, header); !evidence.empty()) {
-            choice.conventions = {&renderer};
-            choice.name = renderer.name;
-            choice.detected_by = std::move(evidence);
-            return choice;
-        }
+    for (bool values : {false, true})
+        for (const RendererConvention& renderer : table.renderers)
+            if (std::string evidence = attribute_evidence(renderer, header, values); !evidence.empty()) {
+                choice.conventions = {&renderer};
+                choice.name = renderer.name;
+                choice.detected_by = std::move(evidence);
+                return choice;
+            }
     const std::set<std::string> layers = layer_names(header);
     std::vector<std::string> best;
     for (const RendererConvention& renderer : table.renderers)

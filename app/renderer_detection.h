@@ -29,9 +29,10 @@ struct RendererChoice {
 };
 
 /// The renderer `requested` names (--renderer; a usage error when the table has
-/// no such name), or with "auto" the one `header` shows: a renderer whose header
-/// attribute rules match wins (table order), else the one whose layer patterns
-/// match most layers of the file (ties: table order).
+/// no such name), or with "auto" the one `header` shows: the first renderer
+/// (table order) one of whose attribute name rules matches, else one of whose
+/// attribute value rules matches, else the one whose layer patterns match most
+/// layers of the file (ties: table order).
 RendererChoice choose_renderer(const ConventionTable& table, const std::string& requested,
                                const io::FrameHeader& header);
 

@@ -371,6 +371,18 @@ TEST_CASE("renderer conventions: detection by header attributes first, then by t
     auto redshift = app::choose_renderer(
         table, "auto", header_of({"R", "G", "B"}, {{"Software", "string \"Redshift 3.5\""}}));
     CHECK(redshift.name == "redshift");
+    // An attribute name is stronger evidence than a value: oiiotool writes its
+    // whole command line into Software, here naming another renderer.
+    auto rewritten = app::choose_renderer(
+        table, "auto",
+        header_of({"R", "G", "B"}, {{"Software", "string \"OpenImageIO 2.4 : oiiotool --attrib x Redshift\""},
+                                    {"arnold/version", "string \"Arnold 7.2.1.0\""}}));
+    CHECK(rewritten.name == "arnold");
+    CHECK(rewritten.detected_by == "header attribute arnold/version");
+    CHECK(
+        app::choose_renderer(
+            table, "auto", header_of({"R", "G", "B"}, {{"Software", "string \"OpenImageIO 2.4 Redshift\""}}))
+            .name == "unknown");
     // Layers: V-Ray's render elements; Redshift's outnumber Arnold's N.
     CHECK(app::choose_renderer(table, "auto", header_of({"VRayDiffuseFilter.R", "VRayNormals.X"}, {})).name ==
           "vray");
