@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <initializer_list>
 #include <sstream>
 
 namespace modestack::app {
@@ -68,10 +69,15 @@ std::vector<std::string> optional_list(const nlohmann::json& object, const char*
                                  : name_list(*found, fmt::format("{}.{}", where, key), templates);
 }
 
-void check_object(const nlohmann::json& value, const std::string& where)
+// An object whose keys are all in `known`: a misspelt key ("guide") is refused, not ignored.
+void check_object(const nlohmann::json& value, const std::string& where,
+                  std::initializer_list<const char*> known)
 {
     if (!value.is_object())
         throw FieldError{where, "must be an object"};
+    for (const auto& [key, ignored] : value.items())
+        if (std::none_of(known.begin(), known.end(), [&](const char* name) { return key == name; }))
+            throw FieldError{where, fmt::format("has an unknown field \"{}\"", key)};
 }
 
 void read_detection(const nlohmann::json& renderer, const std::string& where, RendererConvention& convention)
@@ -80,7 +86,7 @@ void read_detection(const nlohmann::json& renderer, const std::string& where, Re
     if (detect == renderer.end())
         return;
     const std::string at = where + ".detect";
-    check_object(*detect, at);
+    check_object(*detect, at, {"attributes", "values", "layers"});
     convention.detect_attributes = optional_list(*detect, "attributes", at, false);
     convention.detect_layers = optional_list(*detect, "layers", at, false);
     if (auto values = detect->find("values"); values != detect->end()) {
@@ -88,7 +94,7 @@ void read_detection(const nlohmann::json& renderer, const std::string& where, Re
             throw FieldError{at + ".values", "must be a list of {\"attribute\", \"value\"} patterns"};
         for (size_t i = 0; i < values->size(); ++i) {
             const std::string rule_at = fmt::format("{}.values[{}]", at, i);
-            check_object((*values)[i], rule_at);
+            check_object((*values)[i], rule_at, {"attribute", "value"});
             convention.detect_values.push_back({text_field((*values)[i], "attribute", rule_at, true),
                                                 text_field((*values)[i], "value", rule_at, true)});
         }
@@ -105,7 +111,7 @@ void read_light_layers(const nlohmann::json& renderer, const std::string& where,
         throw FieldError{where + ".light_layers", "must be a list of {\"layer\", \"colour\", \"product\"}"};
     for (size_t i = 0; i < lights->size(); ++i) {
         const std::string at = fmt::format("{}.light_layers[{}]", where, i);
-        check_object((*lights)[i], at);
+        check_object((*lights)[i], at, {"layer", "colour", "product"});
         LightLayer light{text_field((*lights)[i], "layer", at, true),
                          text_field((*lights)[i], "colour", at, false),
                          text_field((*lights)[i], "product", at, false)};
@@ -121,7 +127,8 @@ void read_guides_and_variance(const nlohmann::json& renderer, const std::string&
                               RendererConvention& convention)
 {
     if (auto guides = renderer.find("guides"); guides != renderer.end()) {
-        check_object(*guides, where + ".guides");
+        if (!guides->is_object())
+            throw FieldError{where + ".guides", "must be an object"};
         for (const auto& [kind, names] : guides->items()) {
             if (std::find(guide_kinds().begin(), guide_kinds().end(), kind) == guide_kinds().end())
                 throw FieldError{fmt::format("{}.guides.{}", where, kind),
@@ -131,7 +138,8 @@ void read_guides_and_variance(const nlohmann::json& renderer, const std::string&
     }
     convention.variance = optional_list(renderer, "variance", where, true);
     if (auto by_layer = renderer.find("variance_by_layer"); by_layer != renderer.end()) {
-        check_object(*by_layer, where + ".variance_by_layer");
+        if (!by_layer->is_object())
+            throw FieldError{where + ".variance_by_layer", "must be an object"};
         for (const auto& [layer, names] : by_layer->items())
             convention.variance_by_layer[layer] =
                 name_list(names, fmt::format("{}.variance_by_layer.{}", where, layer), false);
@@ -144,7 +152,7 @@ void read_beauty(const nlohmann::json& renderer, const std::string& where, Rende
     if (beauty == renderer.end())
         return;
     const std::string at = where + ".beauty";
-    check_object(*beauty, at);
+    check_object(*beauty, at, {"layer", "sum"});
     convention.beauty_layer = text_field(*beauty, "layer", at, true);
     convention.beauty_sum = optional_list(*beauty, "sum", at, false);
     for (const std::string& term : convention.beauty_sum)
@@ -155,7 +163,9 @@ void read_beauty(const nlohmann::json& renderer, const std::string& where, Rende
 
 RendererConvention read_renderer(const nlohmann::json& renderer, const std::string& where)
 {
-    check_object(renderer, where);
+    check_object(renderer, where,
+                 {"name", "aliases", "label", "detect", "light_layers", "guides", "variance",
+                  "variance_by_layer", "beauty"});
     RendererConvention convention;
     convention.name = text_field(renderer, "name", where, true);
     if (convention.name.empty() || convention.name == "auto")
@@ -232,7 +242,7 @@ ConventionTable parse_conventions(const std::string& json_text, const std::strin
     ConventionTable table;
     table.source = source;
     try {
-        check_object(document, "the table");
+        check_object(document, "the table", {"format", "about", "renderers"});
         if (text_field(document, "format", "the table", true) != kFormat)
             throw FieldError{"format", fmt::format("must be \"{}\"", kFormat)};
         auto renderers = document.find("renderers");

@@ -313,6 +313,8 @@ TEST_CASE(
             "light_layers": [{"layer": "a"}], "beauty": {"layer": "", "sum": ["a", "b"]}}]})",
          "'b', which is not one of its light_layers"},
         {R"({"format": "other", "renderers": []})", "format must be"},
+        {R"({"format": "modestack renderer conventions 1", "renderers": [{"name": "x", "guide": {}}]})",
+         "renderers[0] has an unknown field \"guide\""},
     };
     int index = 0;
     for (const auto& [text, problem] : bad_tables) {
