@@ -97,12 +97,23 @@ Subcommand add_denoise_command(CLI::App& parent)
                         "Let the number of modes vary per pixel (fractional: blends N and N + 1) by the local "
                         "signal of each filtered mode against its noise, and write the map to this EXR "
                         "(channel 'rank'); needs the mode filter");
-    command->add_option("--mode-filter-guides", options->mode_filter_guides,
-                        "Features that may guide the mode filter's edges: auto (default: those the input has: "
-                        "DiffCol/Denoising Albedo, Normal, Depth next to the layer), none, or a list of albedo, "
-                        "normal, depth; SURE decides per mode whether they help")
+    command
+        ->add_option(
+            "--mode-filter-guides", options->mode_filter_guides,
+            "Features that may guide the mode filter's edges: auto (default: those the input has, under "
+            "its renderer's names: DiffCol/Denoising Albedo, Normal, Depth for Cycles, diffuse_albedo, N, "
+            "Z for Arnold, ...), none, or a list of albedo, normal, depth, each of which must be found "
+            "(else exit 2); SURE decides per mode whether they help")
         ->delimiter(',')
         ->allow_extra_args(false);
+    command->add_option(
+        "--renderer", options->renderer,
+        "Whose AOV names to look for guides and variance under: auto (default: detected from the "
+        "first frame's header attributes and layers) or a renderer of the conventions table: "
+        "modestack, cycles, arnold, renderman, karma, vray, redshift");
+    command->add_option("--conventions", options->conventions,
+                        "Renderer conventions table (JSON) to use instead of the one shipped with modestack "
+                        "(share/modestack/conventions.json; man page, RENDERER CONVENTIONS)");
     command->add_flag("--skip-existing", options->skip_existing,
                       "Do not rewrite output frames that exist already (farm re-runs)");
     command->add_option("--colorspace", options->colorspace,

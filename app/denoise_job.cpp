@@ -10,10 +10,13 @@
 #include "app/color_adapters.h"
 #include "app/command.h"
 #include "app/memory_budget.h"
+#include "app/renderer_detection.h"
 #include "app/report/denoise_report.h"
 #include "app/report/html_report.h"
 #include "app/sequence_adapters.h"
 #include "core/common/error.h"
+#include "core/denoise/feature_guide.h"
+#include "io/frame_header.h"
 #include "io/sequence.h"
 #include "io/sequence_reader.h"
 #include "io/text_output.h"
@@ -145,6 +148,18 @@ std::vector<io::HeaderAttribute> provenance_attributes(const io::FrameSequence& 
     };
 }
 
+// The one line for a guide --mode-filter-guides names that the input does not have.
+std::string missing_guide(denoise::Auxiliary kind, const RendererChoice& renderer,
+                          const SequenceSource& source, const std::string& file)
+{
+    const std::string name = denoise::auxiliary_name(kind);
+    return fmt::format(
+        "--mode-filter-guides {}: {} has no {} layer in every frame (looked for {}; renderer {}, {}); "
+        "use --renderer, --conventions, or leave {} out",
+        name, file, name, describe_candidates(source.auxiliary_candidates(kind)), renderer.name,
+        renderer.detected_by, name);
+}
+
 // Clears the paths not to write (already empty, or existing with --skip-existing)
 // and returns how many are left.
 int keep_frames_to_write(std::vector<std::string>& paths, bool skip_existing)
@@ -201,6 +216,8 @@ DenoiseResult denoise_object_space(const DenoiseJob& job, const denoise::Setting
     points_job.points = job.object_space;
     points_job.exr_codec = job.exr_codec;
     points_job.layers = job.layers;
+    points_job.conventions = job.conventions;
+    points_job.renderer = job.renderer;
     points_job.outputs = paths;
     points_job.surface_filter = job.surface_filter;
     points_job.filter_widths = job.filter_widths;
@@ -250,6 +267,12 @@ DenoiseJob make_denoise_job(const DenoiseCommandOptions& options, const CLI::App
     job.colorspace = options.colorspace;
     job.ocio_config = options.ocio_config;
     job.object_space = options.object_space;
+    job.conventions = std::make_shared<const ConventionTable>(load_conventions(options.conventions));
+    check_renderer_name(*job.conventions, options.renderer);
+    job.renderer = options.renderer;
+    // An explicit list asks for each guide; auto takes what the input has.
+    job.guides_required = options.mode_filter_guides != std::vector<std::string>{"auto"} &&
+                          options.mode_filter_guides != std::vector<std::string>{"none"};
     job.exr_codec = options.exr_codec;
     job.surface_filter = !options.no_mode_filter;
     job.filter_widths = options.mode_filter_widths;
@@ -332,7 +355,9 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
         return nothing;
     }
 
-    SequenceSource source(reader);
+    const RendererChoice renderer =
+        choose_renderer(*job.conventions, job.renderer, io::read_frame_header(input.files.front()));
+    SequenceSource source(reader, auxiliary_candidates(renderer, reader.layers()));
     // --max-memory bounds the whole process: the engine gets what the program and
     // open files leave. The mode filter's guide layers are opened now so that
     // what they hold is counted too.
@@ -341,6 +366,8 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
         for (denoise::Auxiliary kind : settings.feature_guide.kinds)
             if (const io::SequenceReader* guide = source.auxiliary_reader(kind))
                 guides.readers.push_back(guide);
+            else if (job.guides_required)
+                throw usage_error(missing_guide(kind, renderer, source, input.files.front()));
         guides.frames = settings.feature_guide.frames;
     }
     const std::int64_t max_memory_bytes = settings.max_memory_bytes;
@@ -410,6 +437,7 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
     result.channel_names = reader.selected_channel_names();
     for (const auto& layer : reader.layers())
         result.layers.push_back({layer.name, layer.channel_names, layer.sigma_names});
+    result.renderer = renderer_json(renderer, source.auxiliary_lookups());
     result.rank_map = job.rank_map;
     result.max_memory_bytes = max_memory_bytes;
     result.non_negative = settings.non_negative != denoise::NonNegativeMode::Off;

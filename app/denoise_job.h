@@ -10,6 +10,7 @@
 #include "app/denoise_stages.h"
 #include "app/method_options.h"
 #include "app/object_space.h"
+#include "app/renderer_conventions.h"
 #include "app/report/report_data.h"
 #include "app/run_context.h"
 #include "core/denoise/engine.h"
@@ -20,6 +21,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -46,6 +48,8 @@ struct DenoiseCommandOptions {
     int mode_filter_modes = 16;
     std::vector<double> mode_filter_widths{0.75, 1.0, 1.5, 2.0, 3.0};
     std::vector<std::string> mode_filter_guides{"auto"};
+    std::string renderer = "auto"; ///< --renderer
+    std::string conventions;       ///< --conventions FILE ("" = the shipped table)
     std::string rank_map;
     bool skip_existing = false;
     std::string colorspace;
@@ -71,6 +75,9 @@ struct DenoiseJob {
     std::string colorspace;
     std::string ocio_config;
     std::string object_space;         ///< "" = image space
+    std::string renderer = "auto";    ///< --renderer
+    std::shared_ptr<const ConventionTable> conventions; ///< the table --conventions names, or the shipped one
+    bool guides_required = false; ///< --mode-filter-guides named them: each must be found
     io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;
     bool surface_filter = true;       ///< object space: filter over the surfaces
     std::vector<double> filter_widths;
@@ -100,6 +107,8 @@ struct DenoiseResult {
     int width = 0, height = 0;   ///< of the frames
     std::vector<std::string> channel_names;
     std::vector<DenoisedLayer> layers;
+    /// The renderer conventions used and the guide and variance layers found (renderer_json).
+    nlohmann::ordered_json renderer;
     std::string rank_map;        ///< the --rank-map file
     double seconds = 0;
     std::int64_t peak_memory_bytes = 0;  ///< the process's, when the run ended

@@ -122,6 +122,8 @@ nlohmann::ordered_json denoise_json(const DenoiseResult& result)
     for (const DenoisedLayer& layer : result.layers)
         layers.push_back({{"layer", layer.name}, {"channels", layer.channels}, {"sigma", layer.sigma}});
     json["layers"] = layers;
+    if (!result.renderer.is_null())
+        json["renderer"] = result.renderer;
     json["solver"] = report.solver;
     json["passes"] = report.passes;
     json["in_memory"] = report.plan.in_memory;

@@ -45,8 +45,9 @@ void add_method_options(CLI::App& command, MethodOptions& options)
     command.add_option(
         "--whiten", options.whiten,
         "Weight every pixel by 1/sqrt(its mean noise variance) before the SVD and back after, so that "
-        "bright noisy regions do not take the modes: auto (the default: when the input has a variance layer "
-        "<layer>Var, e.g. DiffIndVar), on, off");
+        "bright noisy regions do not take the modes: auto (the default: when the input has a variance layer, "
+        "named as its renderer names them: DiffIndVar, diffuse_indirect_variance, indirectDiffuse_mse), on, "
+        "off");
     command.add_option(
         "--estimators", options.estimators,
         "Estimators each pixel may take, comma-separated: rebuild (the temporal rebuild), input (the input "
@@ -153,8 +154,10 @@ TransformStream::TransformStream(const denoise::Transform& transform, denoise::F
     const bool has_variance =
         options.whiten != "off" && source.auxiliary_channels(denoise::Auxiliary::Variance) == source.shape().channels;
     if (options.whiten == "on" && !has_variance)
-        throw bad_input(input, "--whiten on needs a variance layer <layer>Var (e.g. DiffIndVar) with one channel per "
-                               "denoised channel in every frame");
+        throw bad_input(
+            input, "--whiten on needs a variance layer (as the renderer conventions name it: DiffIndVar, "
+                   "diffuse_indirect_variance, ...; see --renderer) with one channel per denoised "
+                   "channel in every frame");
     m_whitening_reason = options.whiten == "off"                               ? "off"
                          : !has_variance                                       ? "no variance layer"
                          : m_transform.kind != denoise::TransformKind::None ? "off under --transform"

@@ -111,7 +111,11 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
     result.frame_width = frame_reader.width();
     result.frame_height = frame_reader.height();
 
-    SequenceSource point_source(point_reader);
+    if (!job.conventions)
+        throw internal_error("the object-space job has no renderer conventions");
+    const RendererChoice renderer =
+        choose_renderer(*job.conventions, job.renderer, io::read_frame_header(point_files.files.front()));
+    SequenceSource point_source(point_reader, auxiliary_candidates(renderer, point_reader.layers()));
     objectspace::SurfaceFilterOptions filter;
     filter.widths = job.filter_widths;
     filter.filter = job.surface_filter;

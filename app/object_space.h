@@ -9,6 +9,7 @@
 // refine works on them unchanged.
 #pragma once
 
+#include "app/renderer_conventions.h"
 #include "core/common/progress.h"
 #include "core/denoise/engine.h"
 #include "core/objectspace/surface_filter.h"
@@ -17,6 +18,7 @@
 #include "io/sequence.h"
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -33,6 +35,9 @@ struct ObjectSpaceJob {
     std::vector<double> filter_widths;            ///< its candidate widths, in lattice spacings
     int sigma_radius = 2;                         ///< sigma's pooling window, in lattice spacings (≥ 1 used)
     io::ExrCodec exr_codec = io::ExrCodec::Libdeflate; ///< --exr-codec, for frames and points alike
+    /// The renderer conventions (--conventions) and --renderer the points' variance is looked for with.
+    std::shared_ptr<const ConventionTable> conventions;
+    std::string renderer = "auto";
 };
 
 /// What the job did, for the summary.

@@ -14,7 +14,10 @@ denoise::ShotShape SequenceSource::shape() const
     return {m_reader.frame_count(), m_reader.width(), m_reader.height(), m_reader.selected_channel_count()};
 }
 
-SequenceSource::SequenceSource(const io::SequenceReader& reader) : m_reader(reader) {}
+SequenceSource::SequenceSource(const io::SequenceReader& reader, AuxiliaryCandidates candidates)
+    : m_reader(reader), m_candidates(std::move(candidates))
+{
+}
 
 void SequenceSource::read_rows(int frame_index, int row_begin, int row_end, float* destination,
                                denoise::PassThroughRows* pass_through)
@@ -41,31 +44,6 @@ std::int64_t SequenceSource::band_bytes_per_row() const
     return bytes;
 }
 
-
-namespace {
-// The layer names tried for `kind`, best first; each entry is the selector list of one candidate.
-std::vector<std::vector<std::string>> auxiliary_candidates(denoise::Auxiliary kind,
-                                                           const std::vector<io::SelectedLayer>& layers)
-{
-    if (layers.empty())
-        return {};
-    if (kind == denoise::Auxiliary::Variance) {
-        std::vector<std::string> names;
-        for (const io::SelectedLayer& layer : layers)
-            names.push_back(layer.name + "Var");
-        return {names};
-    }
-    const std::string& first = layers.front().name;
-    const size_t dot = first.rfind('.');
-    const std::string prefix = dot == std::string::npos ? "" : first.substr(0, dot + 1);
-    switch (kind) {
-    case denoise::Auxiliary::Albedo: return {{prefix + "DiffCol"}, {prefix + "Denoising Albedo"}};
-    case denoise::Auxiliary::Normal: return {{prefix + "Normal"}, {prefix + "Denoising Normal"}};
-    default: return {{prefix + "Depth"}, {prefix + "Denoising Depth"}};
-    }
-}
-}  // namespace
-
 const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxiliary kind) const
 {
     std::lock_guard<std::mutex> lock(m_auxiliary_mutex);
@@ -73,7 +51,7 @@ const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxilia
     if (input.looked)
         return input;
     input.looked = true;
-    for (const std::vector<std::string>& selectors : auxiliary_candidates(kind, m_reader.layers())) {
+    for (const std::vector<std::string>& selectors : m_candidates[static_cast<size_t>(kind)]) {
         try {
             auto reader = std::make_unique<io::SequenceReader>(m_reader.sequence(), selectors, m_reader.exr_codec());
             if (reader->width() != m_reader.width() || reader->height() != m_reader.height())
@@ -83,6 +61,8 @@ const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxilia
                 reader->selected_channel_count() != m_reader.selected_channel_count())
                 continue;
             input.channels = reader->selected_channel_count();
+            for (const io::SelectedLayer& layer : reader->layers())
+                input.found.push_back(layer.name);
             input.reader = std::move(reader);
             return input;
         } catch (const Error&) {
@@ -90,6 +70,17 @@ const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxilia
         }
     }
     return input;
+}
+
+std::vector<AuxiliaryFound> SequenceSource::auxiliary_lookups() const
+{
+    std::lock_guard<std::mutex> lock(m_auxiliary_mutex);
+    std::vector<AuxiliaryFound> lookups;
+    for (size_t kind = 0; kind < m_auxiliary.size(); ++kind)
+        if (m_auxiliary[kind].looked)
+            lookups.push_back(
+                {static_cast<denoise::Auxiliary>(kind), m_candidates[kind], m_auxiliary[kind].found});
+    return lookups;
 }
 
 int SequenceSource::auxiliary_channels(denoise::Auxiliary kind) const { return auxiliary(kind).channels; }

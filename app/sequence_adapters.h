@@ -1,10 +1,12 @@
 // Adapters between io's files and the denoise engine's stream ends: the source
 // reads selected channels of an opened input sequence (and auxiliary layers, a
-// variance or guides, found by name next to them); the sink writes each
+// variance or guides, found under the names the renderer conventions give,
+// app/renderer_detection.h); the sink writes each
 // output frame (every input channel copied, the selected ones replaced, sigma
 // channels appended) and, if asked, the spatial modes.
 #pragma once
 
+#include "app/renderer_detection.h"
 #include "core/denoise/frame_stream.h"
 #include "io/frame_output.h"
 #include "io/sequence_reader.h"
@@ -24,33 +26,42 @@ namespace modestack::app {
 /// PassThroughRows for the sink to copy the rest from.
 class SequenceSource : public denoise::FrameSource {
 public:
-    explicit SequenceSource(const io::SequenceReader& reader);
+    /// `candidates` are the layer names tried for each auxiliary kind, best first
+    /// (auxiliary_candidates of the shot's renderer conventions).
+    SequenceSource(const io::SequenceReader& reader, AuxiliaryCandidates candidates);
     denoise::ShotShape shape() const override;
     void read_rows(int frame_index, int row_begin, int row_end, float* destination,
                    denoise::PassThroughRows* pass_through) override;
     std::int64_t band_bytes_per_row() const override;
-    /// Auxiliary layers are found by name next to the first selected layer `L`
-    /// (prefix `P.` of `P.L`, none for a bare `L`): Variance `<L>Var` for each
-    /// selected layer (our renderer's `DiffIndVar`), Albedo `P.DiffCol` or
-    /// `P.Denoising Albedo`, Normal `P.Normal` or `P.Denoising Normal`, Depth
-    /// `P.Depth` or `P.Denoising Depth`. The first query of a kind opens the
-    /// sequence again for its layer; 0 when no frame-consistent layer is found.
+    /// An auxiliary layer is the first of its candidates that every frame has at
+    /// the frames' size (a variance: one channel per selected channel). The
+    /// first query of a kind opens the sequence again for its layer; 0 when no
+    /// candidate is found.
     int auxiliary_channels(denoise::Auxiliary kind) const override;
     void read_auxiliary_rows(denoise::Auxiliary kind, int frame_index, int row_begin, int row_end,
                              float* destination) override;
     /// The sequence opened for `kind`'s layer (opening it now), or nullptr when
     /// the input has none: for the memory budget, which counts its open files.
     const io::SequenceReader* auxiliary_reader(denoise::Auxiliary kind) const;
+    /// The names `kind` is looked for under, best first.
+    const std::vector<std::vector<std::string>>& auxiliary_candidates(denoise::Auxiliary kind) const
+    {
+        return m_candidates[static_cast<size_t>(kind)];
+    }
+    /// Each kind looked up so far: where it was looked for and what was found (--json).
+    std::vector<AuxiliaryFound> auxiliary_lookups() const;
 
 private:
     struct AuxiliaryInput {
         bool looked = false;
         int channels = 0;
+        std::vector<std::string> found; ///< the layers read
         std::unique_ptr<io::SequenceReader> reader;
     };
     const AuxiliaryInput& auxiliary(denoise::Auxiliary kind) const;
 
     const io::SequenceReader& m_reader;
+    AuxiliaryCandidates m_candidates;
     mutable std::mutex m_auxiliary_mutex;
     mutable std::array<AuxiliaryInput, 4> m_auxiliary;  // by denoise::Auxiliary
 };

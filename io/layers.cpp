@@ -106,6 +106,16 @@ std::vector<SelectedLayer> select_layers(const std::vector<std::string>& channel
         for (const auto& layer : layers)
             if (layer_matches(layer.name, selector))
                 matches.push_back(&layer);
+        // A bare channel of the unnamed layer (Arnold's Z) is a layer of its own.
+        ChannelLayer bare_channel;
+        if (matches.empty())
+            for (const auto& layer : layers)
+                for (size_t i = 0; layer.name.empty() && i < layer.components.size(); ++i)
+                    if (layer.components[i] == selector && selector != "R" && selector != "G" &&
+                        selector != "B" && selector != "A") {
+                        bare_channel = {"", {layer.channel_indices[i]}, {selector}};
+                        matches.push_back(&bare_channel);
+                    }
         if (matches.empty())
             throw bad_input(file, fmt::format("layer '{}' not found (layers: {})", selector, describe_layers(layers)));
         if (matches.size() > 1) {
@@ -116,6 +126,8 @@ std::vector<SelectedLayer> select_layers(const std::vector<std::string>& channel
                                               fmt::join(names, ", ")));
         }
         SelectedLayer layer = make_selection(*matches.front(), channel_names);
+        if (matches.front() == &bare_channel)
+            layer.name = selector;
         if (layer.channel_indices.empty())
             throw bad_input(file, fmt::format("layer '{}' has no channel to denoise", selector));
         for (const auto& previous : selected)

@@ -3,7 +3,9 @@
 // `ViewLayer.DiffInd`, component `R`; a bare `R` has the unnamed layer ""). A
 // layer selector NAME matches the layer `NAME` itself or any layer ending in
 // `.NAME`, so `--layer DiffInd` finds Cycles' `ViewLayer.DiffInd.*`, and
-// `--layer diffuse_indirect` Arnold's `diffuse_indirect.*`.
+// `--layer diffuse_indirect` Arnold's `diffuse_indirect.*`; when no layer
+// matches, NAME may be a bare channel other than R, G, B, A (Arnold's depth `Z`),
+// which is then a layer of one channel named NAME.
 #pragma once
 
 #include <string>

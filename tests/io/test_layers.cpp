@@ -33,6 +33,22 @@ TEST_CASE("layers: Arnold diffuse_indirect.* and RenderMan indirectdiffuse.*")
     CHECK_THROWS_AS(io::select_layers(renderman, {"diffuse"}, "f.exr"), Error);
 }
 
+TEST_CASE("layers: a bare channel such as Arnold's depth Z is a layer of one channel, R, G, B and A are not")
+{
+    std::vector<std::string> arnold{
+        "A", "B", "G", "R", "Z", "diffuse_albedo.B", "diffuse_albedo.G", "diffuse_albedo.R"};
+    auto depth = io::select_layers(arnold, {"Z"}, "f.exr");
+    REQUIRE(depth.size() == 1);
+    CHECK(depth[0].name == "Z");
+    CHECK(depth[0].channel_indices == std::vector<int>{4});
+    CHECK(depth[0].channel_names == std::vector<std::string>{"Z"});
+    CHECK_THROWS_AS(io::select_layers(arnold, {"R"}, "f.exr"), Error);
+    CHECK_THROWS_AS(io::select_layers(arnold, {"depth"}, "f.exr"), Error);
+    // A layer of that name wins over the bare channel.
+    std::vector<std::string> both{"Z", "Z.X"};
+    CHECK(io::select_layers(both, {"Z"}, "f.exr")[0].channel_names == std::vector<std::string>{"Z.X"});
+}
+
 TEST_CASE("layers: without --layer the only RGB set is used, otherwise the error lists the layers")
 {
     CHECK(io::select_layers({"R", "G", "B", "A", "Z"}, {}, "f.exr")[0].channel_indices == std::vector<int>{0, 1, 2});
