@@ -106,8 +106,9 @@ Subcommand add_refine_command(CLI::App& parent)
         ->default_val(kDefaultWindowOverheadPixels);
     command->add_option(
         "--blend", options->blend,
-        "Blend this re-rendered sequence (full frames, or crops placed by their EXR data window) "
-        "into --denoised by the weights of --masks; writes -o");
+        "Blend this re-rendered sequence (full frames, or crops placed by their EXR data window; "
+        "{window} in the pattern = one file per crop window, its index in --windows) into --denoised by the "
+        "weights of --masks; writes -o");
     command->add_option("--blend-layer", options->blend_layer,
                         "With --blend: the re-rendered layer (default: --layer)");
     command->add_option(

@@ -5,7 +5,8 @@
 // re-render, "weight" = the exact float blend weight) and, with --windows, one
 // JSON of crop windows per frame in the forms renderers take (crop_windows.h).
 // refine_blend() reads those weights back and blends the re-rendered layer
-// (full frames, or crops whose EXR data window says where they sit) with
+// (full frames, or crops whose EXR data window says where they sit, one per
+// frame or one per window with {window} in the pattern) with
 // refine::blend_refined_frame, the blend and sigma update of refine().
 #include "app/command.h"
 #include "app/refine_frames.h"
@@ -20,10 +21,13 @@
 #include "io/text_output.h"
 
 #include <fmt/format.h>
+#include <fmt/ranges.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 
 namespace modestack::app {
 namespace {
@@ -41,10 +45,12 @@ nlohmann::ordered_json normalised(const refine::NormalisedWindow& window, bool y
     return {window.min_x, window.max_x, window.min_y, window.max_y};
 }
 
-nlohmann::ordered_json window_json(const refine::PixelWindow& window, int width, int height)
+nlohmann::ordered_json window_json(std::size_t index, const refine::PixelWindow& window, int width,
+                                   int height)
 {
     const refine::NormalisedWindow border = refine::cycles_border(window, width, height);
     return {
+        {"index", index}, // kWindowToken in a --blend pattern
         {"x0", window.x0},
         {"y0", window.y0},
         {"x1", window.x1},
@@ -78,6 +84,77 @@ std::vector<int> rgb_positions(const io::SequenceReader& reader)
         positions.push_back(static_cast<int>(at));
     }
     return positions;
+}
+
+// The re-rendered files of each frame. Without kWindowToken in the pattern, one
+// file per frame, each required. With it, the token stands for the window's
+// index in --windows (0, 1, ...): every window file that exists, none required
+// here (a frame with weighted pixels and no file fails its coverage check).
+std::vector<std::vector<std::string>> find_rendered_files(const std::string& pattern,
+                                                          const std::vector<int>& frames)
+{
+    std::vector<std::vector<std::string>> files(frames.size());
+    const std::size_t at = pattern.find(kWindowToken);
+    if (at == std::string::npos) {
+        const io::FrameSequence sequence = io::find_input_sequence(pattern, io::describe_frames(frames));
+        for (std::size_t i = 0; i < frames.size(); ++i)
+            files[i].push_back(sequence.files[i]);
+        return files;
+    }
+    for (int window = 0;; ++window) {
+        std::string window_pattern = pattern;
+        window_pattern.replace(at, std::string(kWindowToken).size(), std::to_string(window));
+        const std::vector<std::string> names = io::output_sequence(window_pattern, frames).files;
+        bool any = false;
+        for (std::size_t i = 0; i < frames.size(); ++i)
+            if (std::filesystem::exists(names[i])) {
+                files[i].push_back(names[i]);
+                any = true;
+            }
+        if (!any)
+            return files;
+    }
+}
+
+// Throws a bad-input error unless every pixel with a weight lies in the data
+// window of one of the frame's re-rendered files (`placements`).
+void check_coverage(const std::vector<float>& weights, int width,
+                    const std::vector<io::PartialRender>& placements, const std::string& pattern, int frame,
+                    const std::string& mask_file)
+{
+    std::int64_t missing = 0;
+    std::size_t first = 0;
+    for (std::size_t p = 0; p < weights.size(); ++p) {
+        if (!(weights[p] > 0))
+            continue;
+        const int x = static_cast<int>(p % width), y = static_cast<int>(p / width);
+        bool held = false;
+        for (const io::PartialRender& placement : placements)
+            held = held || placement.contains(x, y);
+        if (!held && missing++ == 0)
+            first = p;
+    }
+    if (missing == 0)
+        return;
+    if (placements.empty()) { // only with kWindowToken: name the first window's file
+        std::string first_window = pattern;
+        first_window.replace(first_window.find(kWindowToken), std::string(kWindowToken).size(), "0");
+        throw bad_input(
+            io::output_sequence(first_window, {frame}).files.front(),
+            fmt::format("missing: the mask {} blends {} pixels of frame {}; render the frame's crop "
+                        "windows, or the whole frame",
+                        mask_file, missing, frame));
+    }
+    std::vector<std::string> described;
+    for (const io::PartialRender& placement : placements)
+        described.push_back(
+            fmt::format("{} with data window {}", placement.file,
+                        io::describe_window(placement.x0, placement.y0, placement.width, placement.height)));
+    throw bad_input(
+        placements.front().file,
+        fmt::format("the re-render of frame {} ({}) misses {} pixels that the mask {} blends (the "
+                    "first at x {}, y {}): render the frame's crop windows, or the whole frame",
+                    frame, fmt::join(described, ", "), missing, mask_file, first % width, first / width));
 }
 
 } // namespace
@@ -198,8 +275,8 @@ nlohmann::ordered_json refine_windows_json(const RefineMasksResult& result)
     json["per_frame"] = nlohmann::ordered_json::array();
     for (const MaskedFrame& frame : result.per_frame) {
         nlohmann::ordered_json windows = nlohmann::ordered_json::array();
-        for (const refine::PixelWindow& window : frame.windows)
-            windows.push_back(window_json(window, result.width, result.height));
+        for (std::size_t k = 0; k < frame.windows.size(); ++k)
+            windows.push_back(window_json(k, frame.windows[k], result.width, result.height));
         json["per_frame"].push_back({{"frame", frame.frame},
                                      {"mask", frame.mask_file},
                                      {"pixels_selected", frame.report.selected_pixels},
@@ -230,23 +307,25 @@ RefineBlendResult refine_blend(const RefineJob& job, const CommonOptions& contex
     check_sigma_channels(input.files.front(), job.layer);
     const std::string frame_list = io::describe_frames(input.frames);
     io::FrameSequence masks = io::find_input_sequence(job.masks, frame_list);
-    io::FrameSequence rendered = io::find_input_sequence(job.blend, frame_list);
+    const std::vector<std::vector<std::string>> rendered = find_rendered_files(job.blend, input.frames);
     io::FrameSequence output = io::output_sequence(job.output, input.frames);
     io::SequenceReader reader(input, {job.layer, job.layer + ".sigma"}, job.exr_codec);
     check_colour_layers(reader);
     const std::vector<int> rgb = rgb_positions(reader);
     const int width = reader.width(), height = reader.height();
-    // Every header before the first output: a wrong file fails the run with nothing written.
+    // Every input before the first output: a wrong file fails the run with nothing written.
     for (std::size_t i = 0; i < input.frames.size(); ++i) {
-        io::check_partial_render(rendered.files[i], job.blend_layer, job.blend_variance, width, height);
-        io::FrameHeader mask = io::read_frame_header(masks.files[i]);
-        if (mask.width != width || mask.height != height)
-            throw bad_input(masks.files[i], fmt::format("mask is {}x{} but the denoised frames are {}x{}",
-                                                        mask.width, mask.height, width, height));
+        std::vector<io::PartialRender> placements;
+        for (const std::string& file : rendered[i])
+            placements.push_back(
+                io::check_partial_render(file, job.blend_layer, job.blend_variance, width, height));
+        check_coverage(io::read_mask_weights(masks.files[i], width, height), width, placements, job.blend,
+                       input.frames[i], masks.files[i]);
     }
     std::vector<std::string> inputs = input.files;
     inputs.insert(inputs.end(), masks.files.begin(), masks.files.end());
-    inputs.insert(inputs.end(), rendered.files.begin(), rendered.files.end());
+    for (const auto& files : rendered)
+        inputs.insert(inputs.end(), files.begin(), files.end());
     io::check_outputs(output.files, inputs);
 
     RunContext context(context_options);
@@ -255,12 +334,13 @@ RefineBlendResult refine_blend(const RefineJob& job, const CommonOptions& contex
     const std::vector<io::HeaderAttribute> attributes{
         io::HeaderAttribute::of_text("modestack:version", MODESTACK_VERSION),
         io::HeaderAttribute::of_text("modestack:command", command_line()),
-        io::HeaderAttribute::of_text("modestack:refine_source", rendered.printf_pattern),
+        io::HeaderAttribute::of_text("modestack:refine_source", job.blend),
     };
     RefineBlendResult result;
     std::vector<std::unique_ptr<io::FrameOutput>> outputs;
     LayerAndSigma layer(pixels);
     std::vector<float> values(pixels * 3), variances(pixels * 3);
+    std::vector<std::uint8_t> filled(pixels);
     std::vector<unsigned char> native;
     double estimated_before = 0, estimated_after = 0;
     context.progress().begin(fmt::format("blending re-rendered pixels into {} frames", input.frames.size()),
@@ -269,41 +349,30 @@ RefineBlendResult refine_blend(const RefineJob& job, const CommonOptions& contex
         throw_if_cancelled();
         layer.read(reader, i);
         const std::vector<float> weights = io::read_mask_weights(masks.files[i], width, height);
-        const io::PartialRender render =
-            io::read_partial_render(rendered.files[i], job.blend_layer, job.blend_variance, width, height);
         BlendedFrame frame;
         frame.frame = input.frames[i];
-        frame.source = rendered.files[i];
+        frame.sources = rendered[i];
         frame.report.pixels = static_cast<std::int64_t>(pixels);
-        std::int64_t missing = 0;
-        int first_x = 0, first_y = 0;
-        for (int y = 0; y < height; ++y)
-            for (int x = 0; x < width; ++x) {
-                const std::size_t p = static_cast<std::size_t>(y) * width + x;
-                if (!(weights[p] > 0))
-                    continue;
-                if (!render.contains(x, y)) {
-                    if (missing++ == 0) {
-                        first_x = x;
-                        first_y = y;
+        // Each weighted pixel from the first file whose data window holds it (crops may overlap).
+        std::fill(filled.begin(), filled.end(), 0);
+        for (const std::string& file : rendered[i]) {
+            const io::PartialRender render =
+                io::read_partial_render(file, job.blend_layer, job.blend_variance, width, height);
+            for (int y = render.y0; y < render.y0 + render.height; ++y)
+                for (int x = render.x0; x < render.x0 + render.width; ++x) {
+                    const std::size_t p = static_cast<std::size_t>(y) * width + x;
+                    if (!(weights[p] > 0) || filled[p])
+                        continue;
+                    filled[p] = 1;
+                    ++frame.report.rendered_pixels;
+                    const std::size_t q =
+                        static_cast<std::size_t>(y - render.y0) * render.width + (x - render.x0);
+                    for (int c = 0; c < 3; ++c) {
+                        values[p * 3 + c] = render.value[q * 3 + rgb[c]];
+                        variances[p * 3 + c] = render.variance[q * 3 + rgb[c]];
                     }
-                    continue;
                 }
-                ++frame.report.rendered_pixels;
-                const std::size_t q =
-                    static_cast<std::size_t>(y - render.y0) * render.width + (x - render.x0);
-                for (int c = 0; c < 3; ++c) {
-                    values[p * 3 + c] = render.value[q * 3 + rgb[c]];
-                    variances[p * 3 + c] = render.variance[q * 3 + rgb[c]];
-                }
-            }
-        if (missing > 0)
-            throw bad_input(
-                render.file,
-                fmt::format("its data window {} misses {} pixels that the mask {} blends (the first "
-                            "at x {}, y {}): render the frame's crop windows, or the whole frame",
-                            io::describe_window(render.x0, render.y0, render.width, render.height), missing,
-                            masks.files[i], first_x, first_y));
+        }
         frame.report.estimated_before = refine::estimated_relative_mse(layer.value.data(), layer.sigma.data(),
                                                                        pixels, 3, job.settings.dark_floor);
         refine::blend_refined_frame(weights.data(), values.data(), variances.data(), job.settings.dark_floor,
@@ -326,7 +395,7 @@ RefineBlendResult refine_blend(const RefineJob& job, const CommonOptions& contex
     const double frames = static_cast<double>(input.frames.size());
     result.input = input.printf_pattern;
     result.masks = masks.printf_pattern;
-    result.blend = rendered.printf_pattern;
+    result.blend = job.blend;
     result.output = output.printf_pattern;
     result.frames = input.frames;
     result.layer = reader.layers().front().name;
@@ -361,7 +430,7 @@ nlohmann::ordered_json refine_blend_json(const RefineBlendResult& result)
     json["per_frame"] = nlohmann::ordered_json::array();
     for (const BlendedFrame& frame : result.per_frame)
         json["per_frame"].push_back({{"frame", frame.frame},
-                                     {"source", frame.source},
+                                     {"sources", frame.sources},
                                      {"pixels_blended", frame.report.rendered_pixels},
                                      {"estimated_relmse_before", frame.report.estimated_before},
                                      {"estimated_relmse_after", frame.report.estimated_after}});

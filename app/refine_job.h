@@ -27,6 +27,9 @@ namespace modestack::app {
 /// load, acceleration structure): measure t0 / (seconds per pixel) and pass it.
 inline constexpr std::int64_t kDefaultWindowOverheadPixels = 64 * 64;
 
+/// In a --blend pattern, the index of a crop window in --windows (one file per window).
+inline constexpr const char* kWindowToken = "{window}";
+
 /// Which half of the refine loop a run does.
 enum class RefineMode {
     Render,    ///< choose, re-render with the built-in tracer, blend (one run)
@@ -141,7 +144,7 @@ struct RefineMasksResult {
 /// One frame of refine_blend().
 struct BlendedFrame {
     int frame = 0;
-    std::string source; ///< the re-rendered file
+    std::vector<std::string> sources; ///< the re-rendered files
     refine::FrameRefineReport report;
 };
 

@@ -57,12 +57,26 @@ PartialLayout check_layout(const FrameHeader& header, const std::string& layer,
     return layout;
 }
 
+// Where the file's pixels sit in its display window.
+PartialRender placed(const FrameHeader& header)
+{
+    PartialRender render;
+    render.file = header.file;
+    render.x0 = header.x - header.full_x;
+    render.y0 = header.y - header.full_y;
+    render.width = header.width;
+    render.height = header.height;
+    return render;
+}
+
 } // namespace
 
-void check_partial_render(const std::string& file, const std::string& layer,
-                          const std::string& variance_layer, int full_width, int full_height)
+PartialRender check_partial_render(const std::string& file, const std::string& layer,
+                                   const std::string& variance_layer, int full_width, int full_height)
 {
-    check_layout(read_frame_header(file), layer, variance_layer, full_width, full_height);
+    const FrameHeader header = read_frame_header(file);
+    check_layout(header, layer, variance_layer, full_width, full_height);
+    return placed(header);
 }
 
 PartialRender read_partial_render(const std::string& file, const std::string& layer,
@@ -70,12 +84,7 @@ PartialRender read_partial_render(const std::string& file, const std::string& la
 {
     const FrameHeader header = read_frame_header(file);
     const PartialLayout layout = check_layout(header, layer, variance_layer, full_width, full_height);
-    PartialRender render;
-    render.file = file;
-    render.x0 = header.x - header.full_x;
-    render.y0 = header.y - header.full_y;
-    render.width = header.width;
-    render.height = header.height;
+    PartialRender render = placed(header);
     // One read of the channel span that holds both layers (adjacent in most files).
     std::vector<int> wanted = layout.value_channels;
     wanted.insert(wanted.end(), layout.variance_channels.begin(), layout.variance_channels.end());

@@ -23,9 +23,10 @@ struct PartialRender {
 /// Checks the header of `file` without reading pixels: its display window is
 /// `full_width` × `full_height` and holds the data window, and it has the
 /// `layer` and `variance_layer` (io/layers.h selectors), each with R, G and
-/// B channels. Throws a bad-input Error naming the file otherwise.
-void check_partial_render(const std::string& file, const std::string& layer,
-                          const std::string& variance_layer, int full_width, int full_height);
+/// B channels. Returns where its pixels sit (value and variance left empty).
+/// Throws a bad-input Error naming the file otherwise.
+PartialRender check_partial_render(const std::string& file, const std::string& layer,
+                                   const std::string& variance_layer, int full_width, int full_height);
 
 /// check_partial_render, then reads the two layers' pixels as float.
 PartialRender read_partial_render(const std::string& file, const std::string& layer,
