@@ -37,10 +37,10 @@ double seconds_since(std::chrono::steady_clock::time_point start)
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
-nlohmann::ordered_json normalised(const refine::NormalisedWindow& window, bool y_first_pairs)
+nlohmann::ordered_json normalised(const refine::NormalisedWindow& window, bool as_corners)
 {
-    // RenderMan and Cycles list x min, x max, y min, y max; USD's NDC boxes list the two corners.
-    if (y_first_pairs)
+    // RenderMan lists x min, x max, y min, y max; USD's NDC boxes list the two corners.
+    if (as_corners)
         return {window.min_x, window.min_y, window.max_x, window.max_y};
     return {window.min_x, window.max_x, window.min_y, window.max_y};
 }
