@@ -1,7 +1,9 @@
 // `modestack refine --scene NAME --denoised SEQ -o SEQ`: the command line of
-// re-rendering what the denoiser is unsure of. Parses the options, checks them
-// into a RefineJob and calls refine() (app/refine_job.h), then writes the
-// --json summary and prints one line.
+// re-rendering what the denoiser is unsure of; with --masks-only and --blend,
+// the two halves of that loop around another renderer. Parses the options,
+// checks them into a RefineJob and calls refine(), refine_masks_only() or
+// refine_blend() (app/refine_job.h), then writes the --json summary and prints
+// one line.
 #include "app/command.h"
 #include "app/exr_codec_option.h"
 #include "app/refine_job.h"
@@ -20,11 +22,26 @@ struct RefineCommand {
 
 int run_refine(const RefineCommand& command)
 {
-    RefineResult result = refine(make_refine_job(command.options), command.common);
-    if (!command.json_path.empty())
-        io::write_text_file(command.json_path, refine_json(result).dump(2) + "\n");
-    if (!command.common.quiet)
-        print_refine_summary(result);
+    const RefineJob job = make_refine_job(command.options);
+    if (job.mode == RefineMode::MasksOnly) {
+        RefineMasksResult result = refine_masks_only(job, command.common);
+        if (!command.json_path.empty())
+            io::write_text_file(command.json_path, refine_windows_json(result).dump(2) + "\n");
+        if (!command.common.quiet)
+            print_masks_summary(result);
+    } else if (job.mode == RefineMode::Blend) {
+        RefineBlendResult result = refine_blend(job, command.common);
+        if (!command.json_path.empty())
+            io::write_text_file(command.json_path, refine_blend_json(result).dump(2) + "\n");
+        if (!command.common.quiet)
+            print_blend_summary(result);
+    } else {
+        RefineResult result = refine(job, command.common);
+        if (!command.json_path.empty())
+            io::write_text_file(command.json_path, refine_json(result).dump(2) + "\n");
+        if (!command.common.quiet)
+            print_refine_summary(result);
+    }
     return 0;
 }
 
@@ -36,7 +53,9 @@ Subcommand add_refine_command(CLI::App& parent)
     RefineCommandOptions* options = &command_options->options;
     CLI::App* command = parent.add_subcommand(
         "refine", "Re-render the pixels the denoiser is unsure of at high spp and blend them in");
-    command->add_option("--scene", options->scene, "Built-in scene the denoised frames were rendered from");
+    command->add_option(
+        "--scene", options->scene,
+        "Built-in scene the denoised frames were rendered from (not with --masks-only or --blend)");
     command->add_option("--denoised", options->denoised, "Denoised sequence with <layer>.sigma channels");
     command->add_option("-o,--output", options->output, "Output frame sequence (never an input)");
     command->add_option("--layer", options->layer, "Layer to refine (the renderer's DiffInd, any prefix)");
@@ -69,8 +88,33 @@ Subcommand add_refine_command(CLI::App& parent)
         ->add_option("--feather", options->settings.feather.feather,
                      "Fade the re-rendered values out over this many more pixels")
         ->check(CLI::Range(0, 64));
-    command->add_option("--masks", options->masks,
-                        "Also write the masks: channel 'mask' (1 = re-rendered) and 'weight' (blend weight)");
+    command->add_option(
+        "--masks", options->masks,
+        "Mask sequence: channel 'mask' (1 = re-rendered, half) and 'weight' (blend weight, float); "
+        "written, or with --blend read");
+    command->add_flag("--masks-only", options->masks_only,
+                      "Another renderer re-renders: only choose the pixels (same rule and options) and write "
+                      "--masks and --windows; no --scene, no -o");
+    command->add_option(
+        "--windows", options->windows,
+        "With --masks-only: write the crop windows of every frame as JSON (pixels, Arnold region, "
+        "RenderMan crop window, Karma dataWindowNDC, Cycles border)");
+    command
+        ->add_option("--window-overhead", options->window_overhead,
+                     "What one more crop window costs, in pixels: two windows merge while their bounding box "
+                     "is smaller than their areas plus this")
+        ->default_val(kDefaultWindowOverheadPixels);
+    command->add_option(
+        "--blend", options->blend,
+        "Blend this re-rendered sequence (full frames, or crops placed by their EXR data window; "
+        "{window} in the pattern = one file per crop window, its index in --windows) into --denoised by the "
+        "weights of --masks; writes -o");
+    command->add_option("--blend-layer", options->blend_layer,
+                        "With --blend: the re-rendered layer (default: --layer)");
+    command->add_option(
+        "--blend-variance", options->blend_variance,
+        "With --blend: its per-pixel variance of the mean (default: the layer's name + Var, as "
+        "Cycles' and modestack's DiffIndVar)");
     command->add_option("--json", command_options->json_path,
                         "Write per-frame and total pixels re-rendered, times and estimated relMSE as JSON");
     add_exr_codec_option(*command, options->exr_codec);

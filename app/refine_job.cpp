@@ -10,12 +10,12 @@
 
 #include "app/command.h"
 #include "app/option_values.h"
+#include "app/refine_frames.h"
 #include "app/scene_frames.h"
 #include "core/common/error.h"
 #include "core/scene/builtin_scenes.h"
 #include "io/frame_header.h"
 #include "io/frame_output.h"
-#include "io/layers.h"
 #include "io/sequence.h"
 #include "io/sequence_reader.h"
 
@@ -24,7 +24,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 
 namespace modestack::app {
 namespace {
@@ -38,13 +37,6 @@ const scene::SceneInfo& find_scene(const std::string& name)
     throw internal_error("unknown scene accepted");
 }
 
-bool layer_is(const std::string& layer, const std::string& wanted)
-{
-    return layer == wanted || (layer.size() > wanted.size() &&
-                               layer.compare(layer.size() - wanted.size(), wanted.size(), wanted) == 0 &&
-                               layer[layer.size() - wanted.size() - 1] == '.');
-}
-
 // Checks, from the first frame's header, the things a user most often gets wrong:
 // a sequence that was never denoised, or a layer the renderer cannot re-render.
 void check_denoised_header(const std::string& file, const std::string& layer)
@@ -53,74 +45,60 @@ void check_denoised_header(const std::string& file, const std::string& layer)
     if (last != "DiffInd")
         throw usage_error(
             fmt::format("--layer {}: refine re-renders the indirect layer DiffInd (the one whose "
-                        "noise the renderer measures)",
+                        "noise the renderer measures); other layers: --masks-only and --blend",
                         layer));
-    io::FrameHeader header = io::read_frame_header(file);
-    bool has_sigma = false;
-    for (const auto& group : io::group_layers(header.channel_names))
-        has_sigma = has_sigma || layer_is(group.name, layer + ".sigma");
-    if (!has_sigma)
-        throw bad_input(file,
-                        fmt::format("no {}.sigma channels: refine needs the output of 'modestack denoise "
-                                    "--layer {}'",
-                                    layer, layer));
-}
-
-struct Pass1 {
-    float threshold = std::numeric_limits<float>::infinity();
-    double seconds = 0;
-};
-
-// --budget: one read of every frame's value and sigma to find the shot-wide threshold.
-Pass1 budget_threshold(const io::SequenceReader& reader, const RefineJob& job, Progress& progress)
-{
-    auto start = std::chrono::steady_clock::now();
-    Pass1 pass;
-    const int width = reader.width(), height = reader.height();
-    const std::size_t pixels = static_cast<std::size_t>(width) * height;
-    refine::ScoreHistogram histogram;
-    std::vector<float> rows(pixels * 6), value(pixels * 3), sigma(pixels * 3), scores(pixels);
-    progress.begin("scoring the denoised frames", reader.frame_count());
-    for (int i = 0; i < reader.frame_count(); ++i) {
-        throw_if_cancelled();
-        reader.read_selected(i, 0, height, rows.data());
-        for (std::size_t p = 0; p < pixels; ++p)
-            for (int c = 0; c < 3; ++c) {
-                value[p * 3 + c] = rows[p * 6 + c];
-                sigma[p * 3 + c] = rows[p * 6 + 3 + c];
-            }
-        refine::relative_error_scores(value.data(), sigma.data(), pixels, 3, job.settings.dark_floor,
-                                      scores.data());
-        histogram.add(scores.data(), pixels);
-        progress.advance();
-    }
-    progress.end();
-    pass.threshold = histogram.threshold_for_fraction(job.budget_percent / 100.0);
-    pass.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    return pass;
+    check_sigma_channels(file, layer);
 }
 
 }  // namespace
 
 RefineJob make_refine_job(const RefineCommandOptions& options)
 {
-    if (options.scene.empty())
-        throw usage_error("refine needs --scene NAME (the scene the denoised frames were rendered from)");
-    if (options.denoised.empty() || options.output.empty())
-        throw usage_error("refine needs --denoised SEQ and -o SEQ");
     RefineJob job;
+    if (options.masks_only && !options.blend.empty())
+        throw usage_error("--masks-only and --blend are the two halves of the loop around another renderer: "
+                          "give one");
+    job.mode = options.masks_only       ? RefineMode::MasksOnly
+               : !options.blend.empty() ? RefineMode::Blend
+                                        : RefineMode::Render;
+    if (job.mode != RefineMode::Render && !options.scene.empty())
+        throw usage_error("--scene is for the built-in re-render; --masks-only and --blend render nothing");
+    if (job.mode != RefineMode::MasksOnly && !options.windows.empty())
+        throw usage_error("--windows is written by --masks-only");
+    if (job.mode == RefineMode::Blend && options.budget_percent >= 0)
+        throw usage_error("--blend takes the choice of pixels from --masks: drop --budget");
+    if (job.mode == RefineMode::Render && options.scene.empty())
+        throw usage_error("refine needs --scene NAME (the scene the denoised frames were rendered from), or "
+                          "--masks-only / --blend to re-render with another renderer");
+    if (options.denoised.empty())
+        throw usage_error("refine needs --denoised SEQ");
+    if (job.mode == RefineMode::MasksOnly) {
+        if (options.masks.empty())
+            throw usage_error("--masks-only needs --masks SEQ (where to write the masks)");
+        if (!options.output.empty())
+            throw usage_error("--masks-only writes masks, not frames: drop -o (refine --blend writes them)");
+    } else if (options.output.empty()) {
+        throw usage_error(job.mode == RefineMode::Blend ? "refine --blend needs -o SEQ"
+                                                        : "refine needs --denoised SEQ and -o SEQ");
+    }
+    if (job.mode == RefineMode::Blend && options.masks.empty())
+        throw usage_error("--blend needs --masks SEQ (the masks refine --masks-only wrote)");
+    if (options.window_overhead < 0)
+        throw usage_error("--window-overhead is a number of pixels, 0 or more");
     job.settings = options.settings;
-    parse_image_size(options.size, job.settings.render.width, job.settings.render.height);
-    render::validate_render_options(job.settings.render);
     refine::validate_feather_options(job.settings.feather);
     if (options.budget_percent > 100)
         throw usage_error("--budget is a percentage of the shot's pixels: 0 to 100");
     if (!(options.threshold > 0))
         throw usage_error("--threshold must be above 0 (a relative error, e.g. 0.2)");
-    const scene::SceneInfo& info = find_scene(options.scene);
-    job.scene = options.scene;
-    job.scene_first_frame = info.first_frame;
-    job.scene_last_frame = info.last_frame;
+    if (job.mode == RefineMode::Render) {
+        parse_image_size(options.size, job.settings.render.width, job.settings.render.height);
+        render::validate_render_options(job.settings.render);
+        const scene::SceneInfo& info = find_scene(options.scene);
+        job.scene = options.scene;
+        job.scene_first_frame = info.first_frame;
+        job.scene_last_frame = info.last_frame;
+    }
     job.denoised = options.denoised;
     job.output = options.output;
     job.frames = options.frames;
@@ -130,6 +108,11 @@ RefineJob make_refine_job(const RefineCommandOptions& options)
     job.exr_codec = options.exr_codec;
     job.threshold = options.threshold;
     job.budget_percent = options.budget_percent;
+    job.windows = options.windows;
+    job.window_overhead = options.window_overhead;
+    job.blend = options.blend;
+    job.blend_layer = options.blend_layer.empty() ? options.layer : options.blend_layer;
+    job.blend_variance = options.blend_variance.empty() ? job.blend_layer + "Var" : options.blend_variance;
     return job;
 }
 
@@ -153,20 +136,17 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
             input.files.front(),
             fmt::format("the frames are {}x{} but --size is {}; pass the size they were rendered at",
                         reader.width(), reader.height(), job.size));
-    for (const auto& layer : reader.layers())
-        if (layer.channel_names.size() != 3)
-            throw bad_input(input.files.front(),
-                            fmt::format("layer {} must have R, G and B channels", layer.name));
+    check_colour_layers(reader);
     std::vector<std::string> all_outputs = output.files;
     all_outputs.insert(all_outputs.end(), masks.files.begin(), masks.files.end());
     io::check_outputs(all_outputs, input.files);
 
     RunContext context(context_options);
-    Pass1 pass1;
-    if (job.budget_percent >= 0)
-        pass1 = budget_threshold(reader, job, context.progress());
-    else
-        pass1.threshold = static_cast<float>(job.threshold);
+    double seconds_scoring = 0;
+    const float threshold = job.budget_percent >= 0
+                                ? budget_threshold(reader, job.budget_percent, job.settings.dark_floor,
+                                                   context.progress(), seconds_scoring)
+                                : static_cast<float>(job.threshold);
 
     const int width = reader.width(), height = reader.height();
     const std::size_t pixels = static_cast<std::size_t>(width) * height;
@@ -176,11 +156,12 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
         io::HeaderAttribute::of_text("modestack:command", command_line()),
         io::HeaderAttribute::of_text("modestack:scene", job.scene),
         io::HeaderAttribute::of_integer("modestack:refine_spp", render_options.spp),
-        io::HeaderAttribute::of_real("modestack:refine_threshold", pass1.threshold),
+        io::HeaderAttribute::of_real("modestack:refine_threshold", threshold),
     };
     std::vector<std::unique_ptr<io::FrameOutput>> outputs;
     RefineResult result;
-    std::vector<float> rows(pixels * 6), value(pixels * 3), sigma(pixels * 3), weights(pixels);
+    LayerAndSigma layer(pixels);
+    std::vector<float> weights(pixels);
     std::vector<unsigned char> native;
     double render_seconds = 0, estimated_before = 0, estimated_after = 0;
     context.progress().begin(fmt::format("re-rendering unsure pixels of {} frames at {} spp",
@@ -190,38 +171,17 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
     for (int i = 0; i < reader.frame_count(); ++i) {
         throw_if_cancelled();
         const int frame = input.frames[i];
-        reader.read_selected(i, 0, height, rows.data());
-        for (std::size_t p = 0; p < pixels; ++p)
-            for (int c = 0; c < 3; ++c) {
-                value[p * 3 + c] = rows[p * 6 + c];
-                sigma[p * 3 + c] = rows[p * 6 + 3 + c];
-            }
-        refine::FrameRefineReport report = refine::refine_frame(
-            scene::make_builtin_scene(job.scene, frame), frame, pass1.threshold, job.settings, value.data(),
-            sigma.data(), weights.data(), context.progress());
-        for (std::size_t p = 0; p < pixels; ++p)
-            for (int c = 0; c < 3; ++c) {
-                rows[p * 6 + c] = value[p * 3 + c];
-                rows[p * 6 + 3 + c] = sigma[p * 3 + c];
-            }
+        layer.read(reader, i);
+        refine::FrameRefineReport report =
+            refine::refine_frame(scene::make_builtin_scene(job.scene, frame), frame, threshold, job.settings,
+                                 layer.value.data(), layer.sigma.data(), weights.data(), context.progress());
+        layer.store();
         reader.read_native(i, 0, height, native);
         outputs.push_back(std::make_unique<io::FrameOutput>(
             output.files[i], reader, i, std::vector<std::string>{weight_channel}, attributes, job.exr_codec));
-        outputs.back()->write_replaced_rows(0, height, native, rows.data(), weights.data());
-        if (!masks.files.empty()) {
-            io::NewImageDescription image;
-            image.width = width;
-            image.height = height;
-            image.channel_names = {"mask", "weight"};
-            image.channel_types = {"half", "half"};
-            std::vector<float> mask_pixels(pixels * 2);
-            for (std::size_t p = 0; p < pixels; ++p) {
-                mask_pixels[p * 2] = weights[p] > 0 ? 1.0f : 0.0f;
-                mask_pixels[p * 2 + 1] = weights[p];
-            }
-            outputs.push_back(std::make_unique<io::FrameOutput>(masks.files[i], image, attributes));
-            outputs.back()->write_float_rows(0, height, mask_pixels.data());
-        }
+        outputs.back()->write_replaced_rows(0, height, native, layer.rows.data(), weights.data());
+        if (!masks.files.empty())
+            add_mask_output(outputs, masks.files[i], weights, width, height, attributes);
         result.pixels_selected += report.selected_pixels;
         result.pixels_rendered += report.rendered_pixels;
         result.paths += report.stats.paths;
@@ -243,13 +203,13 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
     result.layer = reader.layers().front().name;
     result.spp = render_options.spp;
     result.budget_percent = job.budget_percent;
-    result.threshold = pass1.threshold;
+    result.threshold = threshold;
     result.dilate = job.settings.feather.dilation;
     result.feather = job.settings.feather.feather;
     result.percent_rendered = 100.0 * static_cast<double>(result.pixels_rendered) / total_pixels;
     result.estimated_relmse_before = estimated_before / frames;
     result.estimated_relmse_after = estimated_after / frames;
-    result.seconds_scoring = pass1.seconds;
+    result.seconds_scoring = seconds_scoring;
     result.seconds_render = render_seconds;
     result.seconds_total = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return result;

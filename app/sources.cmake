@@ -13,6 +13,8 @@ target_sources(modestack_app PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/scene_source.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_refine.cpp
   ${CMAKE_CURRENT_LIST_DIR}/refine_job.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/refine_frames.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/refine_external.cpp
   ${CMAKE_CURRENT_LIST_DIR}/cmd_run.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_composite.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_quality.cpp

@@ -17,5 +17,6 @@ target_sources(modestack_io PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/color_management.cpp
   ${CMAKE_CURRENT_LIST_DIR}/contact_sheet.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mask_image.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/partial_render.cpp
   ${CMAKE_CURRENT_LIST_DIR}/png_encoding.cpp
   ${CMAKE_CURRENT_LIST_DIR}/stage_files.cpp)

@@ -6,6 +6,40 @@
 #include <vector>
 
 namespace modestack::refine {
+namespace {
+
+constexpr int kChannels = 3; // the layer's R, G and B
+
+} // namespace
+
+FrameRefineReport choose_refine_pixels(int width, int height, float threshold, float dark_floor,
+                                       const FeatherOptions& feather, const float* value, const float* sigma,
+                                       float* weights)
+{
+    const std::size_t pixels = static_cast<std::size_t>(width) * height;
+    FrameRefineReport report;
+    report.pixels = static_cast<std::int64_t>(pixels);
+    report.estimated_before = estimated_relative_mse(value, sigma, pixels, kChannels, dark_floor);
+    report.estimated_after = report.estimated_before;
+    std::vector<float> scores(pixels);
+    relative_error_scores(value, sigma, pixels, kChannels, dark_floor, scores.data());
+    std::vector<std::uint8_t> selection = select_pixels(scores.data(), pixels, threshold);
+    drop_isolated_pixels(selection, width, height);
+    feathered_weights(selection.data(), width, height, feather, weights);
+    for (std::size_t p = 0; p < pixels; ++p) {
+        report.selected_pixels += selection[p];
+        report.rendered_pixels += weights[p] > 0 ? 1 : 0;
+    }
+    return report;
+}
+
+void blend_refined_frame(const float* weights, const float* rendered, const float* rendered_variance,
+                         float dark_floor, float* value, float* sigma, FrameRefineReport& report)
+{
+    const auto pixels = static_cast<std::size_t>(report.pixels);
+    blend_refined(weights, pixels, kChannels, rendered, rendered_variance, value, sigma);
+    report.estimated_after = estimated_relative_mse(value, sigma, pixels, kChannels, dark_floor);
+}
 
 FrameRefineReport refine_frame(const scene::Scene& scene, int frame, float threshold,
                                const RefineSettings& settings, float* value, float* sigma, float* weights,
@@ -13,35 +47,22 @@ FrameRefineReport refine_frame(const scene::Scene& scene, int frame, float thres
 {
     const int width = settings.render.width, height = settings.render.height;
     const std::size_t pixels = static_cast<std::size_t>(width) * height;
-    constexpr int kChannels = 3;
-    FrameRefineReport report;
-    report.pixels = static_cast<std::int64_t>(pixels);
-    report.estimated_before = estimated_relative_mse(value, sigma, pixels, kChannels, settings.dark_floor);
-
-    std::vector<float> scores(pixels);
-    relative_error_scores(value, sigma, pixels, kChannels, settings.dark_floor, scores.data());
-    std::vector<std::uint8_t> selection = select_pixels(scores.data(), pixels, threshold);
-    drop_isolated_pixels(selection, width, height);
-    feathered_weights(selection.data(), width, height, settings.feather, weights);
-    std::vector<std::uint8_t> mask(pixels);
-    for (std::size_t p = 0; p < pixels; ++p) {
-        report.selected_pixels += selection[p];
-        mask[p] = weights[p] > 0 ? 1 : 0;
-        report.rendered_pixels += mask[p];
-    }
+    FrameRefineReport report = choose_refine_pixels(width, height, threshold, settings.dark_floor,
+                                                    settings.feather, value, sigma, weights);
     if (report.rendered_pixels == 0) {
         progress.advance(render::tile_count(settings.render));
-        report.estimated_after = report.estimated_before;
         return report;
     }
+    std::vector<std::uint8_t> mask(pixels);
+    for (std::size_t p = 0; p < pixels; ++p)
+        mask[p] = weights[p] > 0 ? 1 : 0;
     auto start = std::chrono::steady_clock::now();
     render::FrameAovs aovs;
     render::render_frame(scene, frame, settings.render, mask.data(), aovs, progress);
     report.seconds_render = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     report.stats = aovs.stats;
-    blend_refined(weights, pixels, kChannels, aovs.diffuse_indirect.pixels.data(),
-                  aovs.indirect_variance.pixels.data(), value, sigma);
-    report.estimated_after = estimated_relative_mse(value, sigma, pixels, kChannels, settings.dark_floor);
+    blend_refined_frame(weights, aovs.diffuse_indirect.pixels.data(), aovs.indirect_variance.pixels.data(),
+                        settings.dark_floor, value, sigma, report);
     return report;
 }
 

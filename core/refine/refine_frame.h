@@ -2,8 +2,12 @@
 // denoised indirect layer by its sigma, select the unsure pixels, feather the
 // selection, re-render every pixel with a non-zero weight at high spp with the
 // path tracer (same scene, frame and camera; the renderer's mask mode), and blend
-// the new values and their noise into the layer. The app reads and writes the
-// files around it; tests call it directly on in-memory frames.
+// the new values and their noise into the layer. The two halves around the
+// render are functions of their own, the one place of each rule, so that
+// `refine --masks-only` (choose, let another renderer render) and
+// `refine --blend` (blend what it rendered) do exactly what refine_frame does.
+// The app reads and writes the files around it; tests call it directly on
+// in-memory frames.
 #pragma once
 
 #include "core/common/progress.h"
@@ -33,6 +37,23 @@ struct FrameRefineReport {
     double estimated_after = 0;       ///< and after
     render::RenderStats stats;        ///< the re-render's paths and rays
 };
+
+/// The pixel-choice rule of refine: scores `value` and `sigma` (width·height·3
+/// floats, interleaved, y = 0 at the top), selects the pixels with a score ≥
+/// `threshold` (selection.h; +infinity selects none), drops lone ones, and
+/// writes the feathered blend weight of every pixel into `weights`
+/// (width·height; > 0 = to be re-rendered). Fills the report's pixels,
+/// selected_pixels, rendered_pixels and estimated_before (= estimated_after).
+FrameRefineReport choose_refine_pixels(int width, int height, float threshold, float dark_floor,
+                                       const FeatherOptions& feather, const float* value, const float* sigma,
+                                       float* weights);
+
+/// The blend of refine: puts re-rendered values (`rendered`, and the renderer's
+/// `rendered_variance` of them, width·height·3 like `value`) into `value` and
+/// `sigma` by `weights` (blend.h; weight 0 leaves a pixel bit for bit) and sets
+/// report.estimated_after. `report.pixels` must be width·height.
+void blend_refined_frame(const float* weights, const float* rendered, const float* rendered_variance,
+                         float dark_floor, float* value, float* sigma, FrameRefineReport& report);
 
 /// Refines frame `frame` of `scene` in place. `value` and `sigma` hold the
 /// denoised DiffInd RGB and its sigma (width·height·3 floats, interleaved,

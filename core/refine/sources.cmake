@@ -4,4 +4,5 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/feather.cpp
   ${CMAKE_CURRENT_LIST_DIR}/blend.cpp
   ${CMAKE_CURRENT_LIST_DIR}/equal_quality.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/refine_frame.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/refine_frame.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/crop_windows.cpp)
