@@ -47,8 +47,9 @@ void complete_report(report::ReportData& data, const std::string& scene_name, co
         data.errors.push_back({"true (against the reference): denoised", errors[0][1]});
         data.errors.push_back({"true (against the reference): refined", errors[0][2]});
     }
-    data.notes.push_back("Denoised: the DiffInd layer (the only one run denoises); refined: the same layer after "
-                         "re-rendering the unsure pixels.");
+    data.notes.push_back(
+        "Denoised: the DiffInd layer (run denoises DiffDir too, on its own modes, before it); "
+        "refined: DiffInd after re-rendering the unsure pixels.");
     data.seconds.clear();
     for (const char* stage : {"render", "denoise", "refine", "composite", "reference"})
         if (seconds.contains(stage))

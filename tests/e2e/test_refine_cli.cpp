@@ -256,7 +256,7 @@ TEST_CASE("run writes every output and the same pixels for --threads 1 and 2")
     REQUIRE_MESSAGE(one.exit_code == 0, one.err);
     auto two = run_modestack(common + "--threads 2 --reference-spp 32 -o " + dir.file("two"));
     REQUIRE_MESSAGE(two.exit_code == 0, two.err);
-    for (const char* folder : {"noisy", "denoised", "refined", "final", "masks"})
+    for (const char* folder : {"noisy", "direct", "denoised", "refined", "final", "masks"})
         CHECK(testkit::list_directory(dir.file(std::string("one/") + folder)).size() == 8);
     CHECK(std::filesystem::exists(dir.file("two/contact_sheet.png")));
     for (int frame : {30, 33, 37}) {
@@ -282,5 +282,14 @@ TEST_CASE("run writes every output and the same pixels for --threads 1 and 2")
         CHECK(summary["seconds"][stage].get<double>() > 0);
     auto relmse = summary["quality"]["DiffInd"]["relmse"];
     CHECK(relmse["denoised"].get<double>() < relmse["noisy"].get<double>());
+    // The direct light is denoised too (on its own modes), so the beauty gains at least as much.
+    CHECK(summary["direct_rank"].get<int>() >= 1);
+    auto beauty = summary["quality"]["beauty"]["relmse"];
+    CHECK(beauty["denoised"].get<double>() < beauty["noisy"].get<double>());
+    // Its DiffDir differs from the noisy pass's: the run wrote a denoised one.
+    const std::string noisy_frame = dir.file("two/noisy/switch.0033.exr"),
+                      final_frame = dir.file("two/final/switch.0033.exr");
+    CHECK(testkit::read_channels(noisy_frame, {"DiffDir.R", "DiffDir.G", "DiffDir.B"}) !=
+          testkit::read_channels(final_frame, {"DiffDir.R", "DiffDir.G", "DiffDir.B"}));
     CHECK(summary["quality"]["DiffInd"]["relmse_crossing_frames"]["refined"].get<double>() > 0);
 }
