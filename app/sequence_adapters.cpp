@@ -127,7 +127,8 @@ void SequenceSink::begin(const denoise::RebuildStart& start)
         m_outputs.push_back(m_paths[frame].empty() ? nullptr
                                                    : std::make_unique<io::FrameOutput>(
                                                          m_paths[frame], m_reader, static_cast<int>(frame),
-                                                         m_sigma_names, attributes, m_reader.exr_codec()));
+                                                         m_sigma_names, attributes, m_reader.exr_codec(),
+                                                         m_part_layout));
 }
 
 void SequenceSink::commit()

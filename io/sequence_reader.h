@@ -1,9 +1,13 @@
 // The input side of every command that reads a frame sequence: opens every frame
 // once, checks before any work that the frames agree (same data window, the
-// selected channels present everywhere, single-part, not deep), then reads
-// bands of scanlines of the selected channels as float, or of all channels in
-// their native pixel types for bit-exact pass-through. Works on scanline and
-// tiled files; never loads a whole frame unless asked for all its rows.
+// selected channels present everywhere, not deep), then reads bands of
+// scanlines of the selected channels as float, or of all channels in their
+// native pixel types for bit-exact pass-through. Works on scanline and tiled
+// files, single- or multi-part: a multi-part frame is read as one image of
+// every part's channels, a part's bare channel `R` named `<part name>.R` (the
+// layer its part's name makes, as OIIO and Nuke present parts) and a channel
+// with a layer kept as it is; its parts must share one data window. Never loads
+// a whole frame unless asked for all its rows.
 #pragma once
 
 #include "io/exr_codec.h"
