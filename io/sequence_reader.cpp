@@ -18,14 +18,20 @@
 namespace modestack::io {
 namespace {
 
-// The name a part gives its channel `channel` in the frame's channel list: a
-// bare name (no layer) is put in the layer the part's name makes, as OIIO's and
-// Nuke's multi-part readers present them; a name with a layer stays as it is.
-std::string presented_channel_name(const std::string& part_name, const std::string& channel)
+// Whether a part's channels are named within the part (Arnold's, Karma's, Nuke's
+// bare R, G, B in a part named by its layer): any channel without a layer
+// makes it so, and then every channel of the part is put in the layer the
+// part's name makes (`R` and `sigma.R` of part `diffuse` are `diffuse.R` and
+// `diffuse.sigma.R`), as OIIO's and Nuke's readers present such parts. A part
+// whose channels all carry a layer keeps them as they are.
+bool named_within_part(const detail::OpenPart& part)
 {
-    if (part_name.empty() || channel.find('.') != std::string::npos)
-        return channel;
-    return part_name + "." + channel;
+    if (part.name.empty())
+        return false;
+    for (const std::string& channel : part.spec.channelnames)
+        if (channel.find('.') == std::string::npos)
+            return true;
+    return false;
 }
 
 // Checks part `part` of `frame` (after part 0) against part 0, the frame the
@@ -50,16 +56,17 @@ void check_part(const detail::OpenFrame& frame, const detail::OpenPart& part)
 }
 
 // The frame's channels as one image: part 0's spec with every part's channels,
-// each named by presented_channel_name. Two parts naming one channel alike are refused.
+// named as named_within_part says. Two parts naming one channel alike are refused.
 OIIO::ImageSpec combined_spec(const detail::OpenFrame& frame)
 {
     OIIO::ImageSpec spec = frame.parts.front().spec;
     spec.channelnames.clear();
     spec.channelformats.clear();
     std::map<std::string, const detail::OpenPart*> owners;
-    for (const detail::OpenPart& part : frame.parts)
+    for (const detail::OpenPart& part : frame.parts) {
+        const std::string prefix = named_within_part(part) ? part.name + "." : "";
         for (int c = 0; c < part.spec.nchannels; ++c) {
-            std::string name = presented_channel_name(part.name, part.spec.channelnames[c]);
+            std::string name = prefix + part.spec.channelnames[c];
             if (auto [owner, added] = owners.emplace(name, &part); !added)
                 throw Error(ErrorKind::BadInput,
                             fmt::format("channel '{}' is in part {} and part {}: a layer must be in one part", name,
@@ -68,6 +75,7 @@ OIIO::ImageSpec combined_spec(const detail::OpenFrame& frame)
             spec.channelnames.push_back(name);
             spec.channelformats.push_back(part.spec.channelformat(c));
         }
+    }
     spec.nchannels = static_cast<int>(spec.channelnames.size());
     spec.format = spec.channelformats.front();
     // The parts' own bookkeeping is not the frame's (a --single-part output must not claim a part).

@@ -4,10 +4,11 @@
 // scanlines of the selected channels as float, or of all channels in their
 // native pixel types for bit-exact pass-through. Works on scanline and tiled
 // files, single- or multi-part: a multi-part frame is read as one image of
-// every part's channels, a part's bare channel `R` named `<part name>.R` (the
-// layer its part's name makes, as OIIO and Nuke present parts) and a channel
-// with a layer kept as it is; its parts must share one data window. Never loads
-// a whole frame unless asked for all its rows.
+// every part's channels, those of a part with bare channels (`R`, as Arnold,
+// Karma and Nuke write a part per layer) in the layer the part's name makes
+// (`<part name>.R`), those of a part whose channels all carry a layer as they
+// are; its parts must share one data window. Never loads a whole frame unless
+// asked for all its rows.
 #pragma once
 
 #include "io/exr_codec.h"

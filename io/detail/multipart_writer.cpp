@@ -66,8 +66,7 @@ AddedChannelPlace added_channel_place(const OpenFrame& source, const std::string
         return {0, channel};
     const OpenPart& part = source.part_of(owner);
     const std::string& name_in_part = part.spec.channelnames[owner - part.first_channel];
-    const bool named_by_part =
-        name_in_part != spec.channelnames[owner]; // a bare channel the part's name prefixed
+    const bool named_by_part = name_in_part != spec.channelnames[owner];  // the part's name was put before it
     if (named_by_part && channel.compare(0, part.name.size() + 1, part.name + ".") == 0)
         return {part.subimage, channel.substr(part.name.size() + 1)};
     return {part.subimage, channel};

@@ -23,9 +23,9 @@ struct OpenFrame;
 /// Where an added channel goes in a multi-part output: the part of the longest
 /// layer of `source` whose name (as presented, see open_frame.h) starts the
 /// added channel's name (`L.sigma.R` goes with layer `L`), else part 0. Its name
-/// in that part loses the part's name when the layer's channels are the part's
-/// bare ones (`diffuse.sigma.R` is `sigma.R` in part `diffuse`), so that it
-/// reads back under the same name.
+/// in that part loses the part's name when the part names its channels within
+/// itself (bare `R`, G, B: `diffuse.sigma.R` is `sigma.R` in part `diffuse`), so
+/// that it reads back under the same name.
 struct AddedChannelPlace {
     int part = 0;
     std::string name; ///< the channel's name in the part

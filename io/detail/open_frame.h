@@ -1,8 +1,9 @@
 // Internal to io/: one opened input frame (OIIO types), shared by the sequence
 // reader and the frame writers. A multi-part EXR is presented as one image:
-// every part's channels in part order, named as layers (a part's bare channel
-// `R` is `<part name>.R`); `parts` says where each part's channels lie. Nothing
-// outside io/ includes this header.
+// every part's channels in part order, named as layers (those of a part with
+// bare channels such as `R` are `<part name>.R`, see sequence_reader.cpp);
+// `parts` says where each part's channels lie. Nothing outside io/ includes
+// this header.
 #pragma once
 
 #include <OpenImageIO/imageio.h>
