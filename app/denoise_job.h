@@ -74,7 +74,7 @@ struct DenoiseJob {
     std::string ocio_config;
     std::string object_space;         ///< "" = image space
     io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;
-    io::PartLayout part_layout = io::PartLayout::AsInput;  ///< --single-part flattens multi-part inputs
+    io::PartLayout part_layout = io::PartLayout::AsInput; ///< --single-part flattens multi-part inputs
     bool surface_filter = true;       ///< object space: filter over the surfaces
     std::vector<double> filter_widths;
     denoise::Settings settings;

@@ -33,7 +33,7 @@ struct ObjectSpaceJob {
     std::vector<double> filter_widths;            ///< its candidate widths, in lattice spacings
     int sigma_radius = 2;                         ///< sigma's pooling window, in lattice spacings (≥ 1 used)
     io::ExrCodec exr_codec = io::ExrCodec::Libdeflate; ///< --exr-codec, for frames and points alike
-    io::PartLayout part_layout = io::PartLayout::AsInput;  ///< --single-part
+    io::PartLayout part_layout = io::PartLayout::AsInput; ///< --single-part
 };
 
 /// What the job did, for the summary.

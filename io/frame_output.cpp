@@ -93,7 +93,7 @@ struct ValuePlace {
 
 struct FrameOutput::State {
     std::unique_ptr<detail::ZipScanlineWriter> zip_writer;  ///< a ZIP/ZIPS copy, written with libdeflate
-    std::unique_ptr<detail::MultiPartWriter> multipart_writer;  ///< a multi-part copy in the input's parts
+    std::unique_ptr<detail::MultiPartWriter> multipart_writer; ///< a multi-part copy in the input's parts
     std::unique_ptr<OIIO::ImageOutput> output;              ///< every other output
     OIIO::ImageSpec spec;
     const detail::OpenFrame* source = nullptr;  ///< the copied input frame, if any
@@ -138,8 +138,8 @@ FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, 
             m_state->all_places_half = m_state->all_places_half && place.type == OIIO::TypeDesc::HALF;
     m_state->spec = spec;
     if (source.multipart() && parts == PartLayout::AsInput) {
-        m_state->multipart_writer = std::make_unique<detail::MultiPartWriter>(m_temporary_path, m_path, source,
-                                                                              extra_channels, extra_type, attributes);
+        m_state->multipart_writer = std::make_unique<detail::MultiPartWriter>(
+            m_temporary_path, m_path, source, extra_channels, extra_type, attributes);
         return;
     }
     if (codec == ExrCodec::Libdeflate)
@@ -188,7 +188,7 @@ FrameOutput::~FrameOutput()
         return;
     if (m_state && m_state->output)
         m_state->output->close();
-    if (m_state) {  // closes the file before it is removed
+    if (m_state) { // closes the file before it is removed
         m_state->zip_writer.reset();
         m_state->multipart_writer.reset();
     }

@@ -36,8 +36,8 @@ struct HeaderAttribute {
 
 /// How an output copied from a multi-part input is laid out.
 enum class PartLayout {
-    AsInput,     ///< the input's parts, names, headers; added channels in their layer's part
-    SinglePart,  ///< one part holding every channel under its layer-prefixed name (--single-part)
+    AsInput,    ///< the input's parts, names, headers; added channels in their layer's part
+    SinglePart, ///< one part holding every channel under its layer-prefixed name (--single-part)
 };
 
 /// A new image described from scratch (used by the renderer).
@@ -60,8 +60,9 @@ public:
     /// copied part by part with OpenEXR's library (detail/multipart_writer.h)
     /// unless `parts` flattens it. `reader` must outlive this object.
     FrameOutput(const std::string& path, const SequenceReader& reader, int frame_index,
-                const std::vector<std::string>& extra_channels, const std::vector<HeaderAttribute>& attributes,
-                ExrCodec codec = ExrCodec::Libdeflate, PartLayout parts = PartLayout::AsInput);
+                const std::vector<std::string>& extra_channels,
+                const std::vector<HeaderAttribute>& attributes, ExrCodec codec = ExrCodec::Libdeflate,
+                PartLayout parts = PartLayout::AsInput);
     /// An output for a new image (always written with OpenImageIO).
     FrameOutput(const std::string& path, const NewImageDescription& image,
                 const std::vector<HeaderAttribute>& attributes);

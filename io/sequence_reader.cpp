@@ -43,7 +43,8 @@ void check_part(const detail::OpenFrame& frame, const detail::OpenPart& part)
     const std::string label = part.name.empty() ? fmt::format("part {}", part.subimage)
                                                 : fmt::format("part {} '{}'", part.subimage, part.name);
     auto refuse = [&](const std::string& problem) {
-        return Error(ErrorKind::BadInput, fmt::format("{} {}", label, problem), frame.file, frame.frame_number);
+        return Error(ErrorKind::BadInput, fmt::format("{} {}", label, problem), frame.file,
+                     frame.frame_number);
     };
     if (spec.deep)
         throw refuse("is deep; deep images are not supported");
@@ -69,8 +70,8 @@ OIIO::ImageSpec combined_spec(const detail::OpenFrame& frame)
             std::string name = prefix + part.spec.channelnames[c];
             if (auto [owner, added] = owners.emplace(name, &part); !added)
                 throw Error(ErrorKind::BadInput,
-                            fmt::format("channel '{}' is in part {} and part {}: a layer must be in one part", name,
-                                        owner->second->subimage, part.subimage),
+                            fmt::format("channel '{}' is in part {} and part {}: a layer must be in one part",
+                                        name, owner->second->subimage, part.subimage),
                             frame.file, frame.frame_number);
             spec.channelnames.push_back(name);
             spec.channelformats.push_back(part.spec.channelformat(c));
@@ -125,7 +126,8 @@ std::unique_ptr<detail::OpenFrame> open_frame(const std::string& file, int frame
         part.byte_offset = frame->byte_offset[first_channel];
         first_channel += part.spec.nchannels;
         part.native_pixel_bytes =
-            (first_channel < frame->spec.nchannels ? frame->byte_offset[first_channel] : offset) - part.byte_offset;
+            (first_channel < frame->spec.nchannels ? frame->byte_offset[first_channel] : offset) -
+            part.byte_offset;
         if (codec == ExrCodec::Libdeflate)
             part.zip_layout = detail::zip_layout(*frame, part);
     }
@@ -146,8 +148,8 @@ void read_part_rows(const detail::OpenFrame& frame, const detail::OpenPart& part
     int y_begin = spec.y + row_begin, y_end = spec.y + row_end;
     bool ok;
     if (spec.tile_width == 0) {
-        ok = frame.input->read_scanlines(part.subimage, 0, y_begin, y_end, spec.z, channel_begin, channel_end, type,
-                                         destination);
+        ok = frame.input->read_scanlines(part.subimage, 0, y_begin, y_end, spec.z, channel_begin, channel_end,
+                                         type, destination);
     } else {
         // Tiles must be read whole: read the tile rows that cover the band, then copy.
         int tile_y0 = spec.y + (row_begin / spec.tile_height) * spec.tile_height;
@@ -175,7 +177,8 @@ void read_rows(const detail::OpenFrame& frame, int row_begin, int row_end, int c
                OIIO::TypeDesc type, void* destination)
 {
     if (!frame.multipart()) {
-        read_part_rows(frame, frame.parts.front(), row_begin, row_end, channel_begin, channel_end, type, destination);
+        read_part_rows(frame, frame.parts.front(), row_begin, row_end, channel_begin, channel_end, type,
+                       destination);
         return;
     }
     auto value_bytes = [&](int channel) {
@@ -187,7 +190,7 @@ void read_rows(const detail::OpenFrame& frame, int row_begin, int row_end, int c
     const size_t pixels = static_cast<size_t>(frame.spec.width) * (row_end - row_begin);
     auto* out = static_cast<unsigned char*>(destination);
     thread_local std::vector<unsigned char> part_rows;
-    size_t out_offset = 0;  // of the part's first read channel in an output pixel
+    size_t out_offset = 0; // of the part's first read channel in an output pixel
     for (const detail::OpenPart& part : frame.parts) {
         const int begin = std::max(channel_begin, part.first_channel);
         const int end = std::min(channel_end, part.first_channel + part.spec.nchannels);
@@ -197,10 +200,11 @@ void read_rows(const detail::OpenFrame& frame, int row_begin, int row_end, int c
         for (int c = begin; c < end; ++c)
             part_pixel_bytes += value_bytes(c);
         part_rows.resize(pixels * part_pixel_bytes);
-        read_part_rows(frame, part, row_begin, row_end, begin - part.first_channel, end - part.first_channel, type,
-                       part_rows.data());
+        read_part_rows(frame, part, row_begin, row_end, begin - part.first_channel, end - part.first_channel,
+                       type, part_rows.data());
         for (size_t p = 0; p < pixels; ++p)
-            std::memcpy(out + p * pixel_bytes + out_offset, part_rows.data() + p * part_pixel_bytes, part_pixel_bytes);
+            std::memcpy(out + p * pixel_bytes + out_offset, part_rows.data() + p * part_pixel_bytes,
+                        part_pixel_bytes);
         out_offset += part_pixel_bytes;
     }
 }
@@ -218,7 +222,7 @@ int part_chunk_rows(const OIIO::ImageSpec& spec)
     if (compression == "piz" || compression == "pxr24" || compression == "b44" || compression == "b44a" ||
         compression == "dwaa")
         return 32;
-    return 1;  // none, rle, zips
+    return 1; // none, rle, zips
 }
 
 }  // namespace

@@ -45,7 +45,8 @@ bool read_zip_part(exr_const_context_t context, int part_index, const OIIO::Imag
     int parts = 0;
     exr_storage_t storage = EXR_STORAGE_LAST_TYPE;
     if (exr_get_count(context, &parts) != EXR_ERR_SUCCESS || part_index < 0 || part_index >= parts ||
-        exr_get_storage(context, part_index, &storage) != EXR_ERR_SUCCESS || storage != EXR_STORAGE_SCANLINE ||
+        exr_get_storage(context, part_index, &storage) != EXR_ERR_SUCCESS ||
+        storage != EXR_STORAGE_SCANLINE ||
         exr_get_compression(context, part_index, &part.compression) != EXR_ERR_SUCCESS ||
         (part.compression != EXR_COMPRESSION_ZIP && part.compression != EXR_COMPRESSION_ZIPS) ||
         exr_get_channels(context, part_index, &part.channels) != EXR_ERR_SUCCESS ||

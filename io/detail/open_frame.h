@@ -19,11 +19,11 @@ struct ZipLayout;
 /// One part (OIIO subimage) of an opened frame; a single-part file has one.
 struct OpenPart {
     int subimage = 0;
-    std::string name;               ///< the part's name ("" for a single-part file without one)
-    OIIO::ImageSpec spec;           ///< as OIIO reads the part: the file's own channel names
-    int first_channel = 0;          ///< its first channel in the frame's channel list
-    size_t byte_offset = 0;         ///< where its channels start in a native pixel of the frame
-    size_t native_pixel_bytes = 0;  ///< its channels' bytes in a native pixel
+    std::string name;              ///< the part's name ("" for a single-part file without one)
+    OIIO::ImageSpec spec;          ///< as OIIO reads the part: the file's own channel names
+    int first_channel = 0;         ///< its first channel in the frame's channel list
+    size_t byte_offset = 0;        ///< where its channels start in a native pixel of the frame
+    size_t native_pixel_bytes = 0; ///< its channels' bytes in a native pixel
     /// Set for a ZIP/ZIPS scanline part read with ExrCodec::Libdeflate: its rows
     /// are decoded with libdeflate (zip_scanline_reader.h), not through OIIO.
     std::shared_ptr<const ZipLayout> zip_layout;

@@ -97,7 +97,8 @@ void read_zip_rows(const OpenFrame& frame, const ZipLayout& layout, int row_begi
     const int lines = layout.lines_per_chunk;
     for (int chunk_row = row_begin - row_begin % lines; chunk_row < row_end; chunk_row += lines) {
         exr_chunk_info_t chunk;
-        if (exr_read_scanline_chunk_info(input.context, layout.part, layout.first_y + chunk_row, &chunk) != EXR_ERR_SUCCESS)
+        if (exr_read_scanline_chunk_info(input.context, layout.part, layout.first_y + chunk_row, &chunk) !=
+            EXR_ERR_SUCCESS)
             fail(last_core_message());
         const std::size_t raw_bytes = static_cast<std::size_t>(chunk.height) * layout.row_bytes;
         if (chunk.unpacked_size != raw_bytes || chunk.packed_size > chunk.unpacked_size || chunk.packed_size == 0)
