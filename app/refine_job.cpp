@@ -57,7 +57,7 @@ void check_denoised_header(const std::string& file, const std::string& layer)
                         layer));
     io::FrameHeader header = io::read_frame_header(file);
     bool has_sigma = false;
-    for (const auto& group : io::group_layers(header.channel_names))
+    for (const auto& group : io::group_layers(io::channels_as_read(header)))
         has_sigma = has_sigma || layer_is(group.name, layer + ".sigma");
     if (!has_sigma)
         throw bad_input(file,

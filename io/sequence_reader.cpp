@@ -18,22 +18,6 @@
 namespace modestack::io {
 namespace {
 
-// Whether a part's channels are named within the part (Arnold's, Karma's, Nuke's
-// bare R, G, B in a part named by its layer): any channel without a layer
-// makes it so, and then every channel of the part is put in the layer the
-// part's name makes (`R` and `sigma.R` of part `diffuse` are `diffuse.R` and
-// `diffuse.sigma.R`), as OIIO's and Nuke's readers present such parts. A part
-// whose channels all carry a layer keeps them as they are.
-bool named_within_part(const detail::OpenPart& part)
-{
-    if (part.name.empty())
-        return false;
-    for (const std::string& channel : part.spec.channelnames)
-        if (channel.find('.') == std::string::npos)
-            return true;
-    return false;
-}
-
 // Checks part `part` of `frame` (after part 0) against part 0, the frame the
 // sequence is checked as: a multi-part frame is one image of several parts.
 void check_part(const detail::OpenFrame& frame, const detail::OpenPart& part)
@@ -57,7 +41,7 @@ void check_part(const detail::OpenFrame& frame, const detail::OpenPart& part)
 }
 
 // The frame's channels as one image: part 0's spec with every part's channels,
-// named as named_within_part says. Two parts naming one channel alike are refused.
+// named as part_channel_names says. Two parts naming one channel alike are refused.
 OIIO::ImageSpec combined_spec(const detail::OpenFrame& frame)
 {
     OIIO::ImageSpec spec = frame.parts.front().spec;
@@ -65,9 +49,9 @@ OIIO::ImageSpec combined_spec(const detail::OpenFrame& frame)
     spec.channelformats.clear();
     std::map<std::string, const detail::OpenPart*> owners;
     for (const detail::OpenPart& part : frame.parts) {
-        const std::string prefix = named_within_part(part) ? part.name + "." : "";
+        const std::vector<std::string> names = part_channel_names(part.name, part.spec.channelnames);
         for (int c = 0; c < part.spec.nchannels; ++c) {
-            std::string name = prefix + part.spec.channelnames[c];
+            const std::string& name = names[c];
             if (auto [owner, added] = owners.emplace(name, &part); !added)
                 throw Error(ErrorKind::BadInput,
                             fmt::format("channel '{}' is in part {} and part {}: a layer must be in one part",
