@@ -114,6 +114,10 @@ Subcommand add_denoise_command(CLI::App& parent)
     command->add_option("--conventions", options->conventions,
                         "Renderer conventions table (JSON) to use instead of the one shipped with modestack "
                         "(share/modestack/conventions.json; man page, RENDERER CONVENTIONS)");
+    command->add_flag(
+        "--single-part", options->single_part,
+        "Write a multi-part input's outputs as single-part files, every channel named by its layer "
+        "(default: the input's parts, names and headers, each sigma in its layer's part)");
     command->add_flag("--skip-existing", options->skip_existing,
                       "Do not rewrite output frames that exist already (farm re-runs)");
     command->add_option("--colorspace", options->colorspace,

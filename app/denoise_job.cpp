@@ -215,6 +215,7 @@ DenoiseResult denoise_object_space(const DenoiseJob& job, const denoise::Setting
     points_job.frames = input;
     points_job.points = job.object_space;
     points_job.exr_codec = job.exr_codec;
+    points_job.part_layout = job.part_layout;
     points_job.layers = job.layers;
     points_job.conventions = job.conventions;
     points_job.renderer = job.renderer;
@@ -274,6 +275,7 @@ DenoiseJob make_denoise_job(const DenoiseCommandOptions& options, const CLI::App
     job.guides_required = options.mode_filter_guides != std::vector<std::string>{"auto"} &&
                           options.mode_filter_guides != std::vector<std::string>{"none"};
     job.exr_codec = options.exr_codec;
+    job.part_layout = options.single_part ? io::PartLayout::SinglePart : io::PartLayout::AsInput;
     job.surface_filter = !options.no_mode_filter;
     job.filter_widths = options.mode_filter_widths;
     job.method_options = options.method_options;
@@ -375,6 +377,7 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
                                                      reader.selected_channel_count(), guides);
     SequenceSink sink(reader, paths, job.save_modes);
     sink.write_rank_map_to(job.rank_map);
+    sink.set_part_layout(job.part_layout);
     std::vector<io::HeaderAttribute> attributes = provenance_attributes(input);
     append_color_attributes(attributes, color);
     if (job.transform.kind != denoise::TransformKind::None)

@@ -16,6 +16,7 @@
 #include "core/denoise/engine.h"
 #include "core/denoise/transform.h"
 #include "io/exr_codec.h"
+#include "io/frame_output.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -56,6 +57,7 @@ struct DenoiseCommandOptions {
     std::string ocio_config;
     std::string object_space;  ///< --object-space: the points sequence
     io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;  ///< --exr-codec
+    bool single_part = false;                           ///< --single-part
     MethodOptions method_options;
     StageOptions stage;
 };
@@ -79,6 +81,7 @@ struct DenoiseJob {
     std::shared_ptr<const ConventionTable> conventions; ///< the table --conventions names, or the shipped one
     bool guides_required = false; ///< --mode-filter-guides named them: each must be found
     io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;
+    io::PartLayout part_layout = io::PartLayout::AsInput; ///< --single-part flattens multi-part inputs
     bool surface_filter = true;       ///< object space: filter over the surfaces
     std::vector<double> filter_widths;
     denoise::Settings settings;

@@ -132,6 +132,7 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
                                   point_files.files.front()));
 
     SequenceSink sink(frame_reader, job.outputs, "");
+    sink.set_part_layout(job.part_layout);
     std::vector<io::HeaderAttribute> attributes = job.attributes;
     attributes.push_back(io::HeaderAttribute::of_text("modestack:object_space", point_files.printf_pattern));
     attributes.push_back(io::HeaderAttribute::of_integer("modestack:points", result.points));

@@ -38,6 +38,7 @@ struct ObjectSpaceJob {
     /// The renderer conventions (--conventions) and --renderer the points' variance is looked for with.
     std::shared_ptr<const ConventionTable> conventions;
     std::string renderer = "auto";
+    io::PartLayout part_layout = io::PartLayout::AsInput; ///< --single-part
 };
 
 /// What the job did, for the summary.

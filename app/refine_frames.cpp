@@ -26,7 +26,7 @@ void check_sigma_channels(const std::string& file, const std::string& layer)
 {
     io::FrameHeader header = io::read_frame_header(file);
     bool has_sigma = false;
-    for (const auto& group : io::group_layers(header.channel_names))
+    for (const auto& group : io::group_layers(io::channels_as_read(header))) // every part's
         has_sigma = has_sigma || layer_is(group.name, layer + ".sigma");
     if (!has_sigma)
         throw bad_input(file,

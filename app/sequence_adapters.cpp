@@ -115,10 +115,11 @@ void SequenceSink::begin(const denoise::RebuildStart& start)
     attributes.push_back(io::HeaderAttribute::of_text("modestack:solver", start.solver));
     m_outputs.clear();
     for (size_t frame = 0; frame < m_paths.size(); ++frame)
-        m_outputs.push_back(m_paths[frame].empty() ? nullptr
-                                                   : std::make_unique<io::FrameOutput>(
-                                                         m_paths[frame], m_reader, static_cast<int>(frame),
-                                                         m_sigma_names, attributes, m_reader.exr_codec()));
+        m_outputs.push_back(m_paths[frame].empty()
+                                ? nullptr
+                                : std::make_unique<io::FrameOutput>(
+                                      m_paths[frame], m_reader, static_cast<int>(frame), m_sigma_names,
+                                      attributes, m_reader.exr_codec(), m_part_layout));
 }
 
 void SequenceSink::commit()

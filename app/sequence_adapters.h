@@ -76,6 +76,8 @@ public:
 
     /// Attributes every output header gets (provenance), besides rank, rule and solver.
     void set_attributes(std::vector<io::HeaderAttribute> attributes) { m_attributes = std::move(attributes); }
+    /// --single-part: a multi-part input's outputs in one part (default: its parts).
+    void set_part_layout(io::PartLayout layout) { m_part_layout = layout; }
     /// --rank-map: also writes the per-pixel rank to `path` (one channel "rank").
     void write_rank_map_to(std::string path) { m_rank_map_path = std::move(path); }
     /// Opens every output under its temporary name.
@@ -98,6 +100,7 @@ private:
     std::string m_modes_directory;
     std::vector<std::string> m_sigma_names;
     std::vector<io::HeaderAttribute> m_attributes;
+    io::PartLayout m_part_layout = io::PartLayout::AsInput;
     std::vector<std::unique_ptr<io::FrameOutput>> m_outputs;
     std::vector<std::unique_ptr<io::FrameOutput>> m_mode_outputs;
     std::string m_rank_map_path;

@@ -1,6 +1,7 @@
 #include "io/frame_header.h"
 
 #include "io/detail/open_image.h"
+#include "io/layers.h"
 
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
@@ -49,6 +50,18 @@ FrameHeader read_frame_header(const std::string& file)
     for (int part = 0; input->seek_subimage(part, 0); ++part)
         header.parts.push_back(describe_part(input->spec()));
     return header;
+}
+
+std::vector<std::string> channels_as_read(const FrameHeader& header)
+{
+    if (header.parts.size() <= 1)
+        return header.channel_names;
+    std::vector<std::string> names;
+    for (const ImagePart& part : header.parts) {
+        const std::vector<std::string> part_names = part_channel_names(part.name, part.channel_names);
+        names.insert(names.end(), part_names.begin(), part_names.end());
+    }
+    return names;
 }
 
 std::string describe_window(int x, int y, int width, int height)

@@ -37,6 +37,11 @@ struct FrameHeader : ImagePart {
 /// is missing, not an image, or unreadable.
 FrameHeader read_frame_header(const std::string& file);
 
+/// Every channel of the frame as the sequence readers name it: part 0's for a
+/// single-part file; every part's, in part order, named as part_channel_names
+/// (io/layers.h) says, for a multi-part one.
+std::vector<std::string> channels_as_read(const FrameHeader& header);
+
 /// "160x120" or "160x120+8+4" when the window does not start at 0,0.
 std::string describe_window(int x, int y, int width, int height);
 

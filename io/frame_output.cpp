@@ -1,6 +1,7 @@
 #include "io/frame_output.h"
 
 #include "core/common/error.h"
+#include "io/detail/multipart_writer.h"
 #include "io/detail/open_frame.h"
 #include "io/detail/zip_scanline_writer.h"
 #include "io/half_conversion.h"
@@ -92,6 +93,7 @@ struct ValuePlace {
 
 struct FrameOutput::State {
     std::unique_ptr<detail::ZipScanlineWriter> zip_writer;  ///< a ZIP/ZIPS copy, written with libdeflate
+    std::unique_ptr<detail::MultiPartWriter> multipart_writer; ///< a multi-part copy in the input's parts
     std::unique_ptr<OIIO::ImageOutput> output;              ///< every other output
     OIIO::ImageSpec spec;
     const detail::OpenFrame* source = nullptr;  ///< the copied input frame, if any
@@ -103,7 +105,7 @@ struct FrameOutput::State {
 
 FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, int frame_index,
                          const std::vector<std::string>& extra_channels,
-                         const std::vector<HeaderAttribute>& attributes, ExrCodec codec)
+                         const std::vector<HeaderAttribute>& attributes, ExrCodec codec, PartLayout parts)
     : m_path(path), m_temporary_path(claim_temporary_path(path)), m_state(std::make_unique<State>())
 {
     const detail::OpenFrame& source = reader.frame(frame_index);
@@ -135,6 +137,11 @@ FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, 
         for (const ValuePlace& place : *places)
             m_state->all_places_half = m_state->all_places_half && place.type == OIIO::TypeDesc::HALF;
     m_state->spec = spec;
+    if (source.multipart() && parts == PartLayout::AsInput) {
+        m_state->multipart_writer = std::make_unique<detail::MultiPartWriter>(
+            m_temporary_path, m_path, source, extra_channels, extra_type, attributes);
+        return;
+    }
     if (codec == ExrCodec::Libdeflate)
         m_state->zip_writer =
             detail::ZipScanlineWriter::open(m_temporary_path, m_path, source, extra_channels, attributes);
@@ -181,8 +188,10 @@ FrameOutput::~FrameOutput()
         return;
     if (m_state && m_state->output)
         m_state->output->close();
-    if (m_state)
-        m_state->zip_writer.reset();  // closes the file before it is removed
+    if (m_state) { // closes the file before it is removed
+        m_state->zip_writer.reset();
+        m_state->multipart_writer.reset();
+    }
     std::error_code ignored;
     if (!m_temporary_path.empty())
         stdfs::remove(m_temporary_path, ignored);
@@ -233,6 +242,10 @@ void FrameOutput::write_replaced_rows(int row_begin, int row_end, const unsigned
         place_values(pixels, replaced, extra, out);
     if (m_state->zip_writer) {
         m_state->zip_writer->write_rows(row_begin, row_end, out);
+        return;
+    }
+    if (m_state->multipart_writer) {
+        m_state->multipart_writer->write_rows(row_begin, row_end, out);
         return;
     }
     const OIIO::ImageSpec& spec = m_state->spec;
@@ -299,6 +312,9 @@ void FrameOutput::commit()
     if (m_state->zip_writer) {
         m_state->zip_writer->finish();
         m_state->zip_writer.reset();
+    } else if (m_state->multipart_writer) {
+        m_state->multipart_writer->finish();
+        m_state->multipart_writer.reset();
     } else {
         errno = 0;  // fail() reports the system's reason, e.g. a full disk
         if (!m_state->output->close())

@@ -2,7 +2,9 @@
 // directory and renamed to its final name only by commit(), so a crash, a
 // full disk or an interrupt never leaves a final-named file that is incomplete.
 // A denoise output copies its input frame's header (channels, pixel types,
-// windows, attributes); a render output is described from scratch.
+// windows, attributes) and, by default, its parts (a multi-part input gives a
+// multi-part output, each added channel in the part of its layer); a render
+// output is described from scratch.
 #pragma once
 
 #include "io/exr_codec.h"
@@ -32,6 +34,12 @@ struct HeaderAttribute {
     static HeaderAttribute of_real(std::string name, double value);
 };
 
+/// How an output copied from a multi-part input is laid out.
+enum class PartLayout {
+    AsInput,    ///< the input's parts, names, headers; added channels in their layer's part
+    SinglePart, ///< one part holding every channel under its layer-prefixed name (--single-part)
+};
+
 /// A new image described from scratch (used by the renderer).
 struct NewImageDescription {
     int width = 0;
@@ -47,11 +55,14 @@ public:
     /// An output that copies frame `frame_index` of `reader` (every channel,
     /// pixel type, window and attribute), with `extra_channels` appended in the
     /// pixel type of the first selected channel, plus `attributes`. Tiled
-    /// inputs are written as scanline files; `codec` encodes the copy of a
-    /// ZIP/ZIPS scanline input. `reader` must outlive this object.
+    /// inputs (and tiled parts) are written as scanline files; `codec` encodes
+    /// the copy of a single-part ZIP/ZIPS scanline input; a multi-part input is
+    /// copied part by part with OpenEXR's library (detail/multipart_writer.h)
+    /// unless `parts` flattens it. `reader` must outlive this object.
     FrameOutput(const std::string& path, const SequenceReader& reader, int frame_index,
-                const std::vector<std::string>& extra_channels, const std::vector<HeaderAttribute>& attributes,
-                ExrCodec codec = ExrCodec::Libdeflate);
+                const std::vector<std::string>& extra_channels,
+                const std::vector<HeaderAttribute>& attributes, ExrCodec codec = ExrCodec::Libdeflate,
+                PartLayout parts = PartLayout::AsInput);
     /// An output for a new image (always written with OpenImageIO).
     FrameOutput(const std::string& path, const NewImageDescription& image,
                 const std::vector<HeaderAttribute>& attributes);

@@ -46,6 +46,21 @@ SelectedLayer make_selection(const ChannelLayer& layer, const std::vector<std::s
 
 }  // namespace
 
+std::vector<std::string> part_channel_names(const std::string& part_name,
+                                            const std::vector<std::string>& channels)
+{
+    const bool named_within_part =
+        !part_name.empty() && std::any_of(channels.begin(), channels.end(), [](const std::string& channel) {
+            return channel.find('.') == std::string::npos;
+        });
+    if (!named_within_part)
+        return channels;
+    std::vector<std::string> names;
+    for (const std::string& channel : channels)
+        names.push_back(part_name + "." + channel);
+    return names;
+}
+
 void split_channel_name(const std::string& channel, std::string& layer, std::string& component)
 {
     size_t dot = channel.rfind('.');

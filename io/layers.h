@@ -28,6 +28,16 @@ struct SelectedLayer {
     std::vector<std::string> sigma_names;    ///< "<layer>.sigma.<component>" per channel
 };
 
+/// The names the channels of a part named `part_name` have when a multi-part
+/// file is read as one image (the one rule, for the readers and `info`): a part
+/// with a bare channel (`R`, as Arnold, Karma and Nuke write a part per layer)
+/// puts every channel in the layer its name makes (`R` and `sigma.R` of part
+/// `diffuse` are `diffuse.R`, `diffuse.sigma.R`), as OIIO's and Nuke's readers
+/// present such parts; a part whose channels all carry a layer, or a part
+/// without a name, keeps them as they are.
+std::vector<std::string> part_channel_names(const std::string& part_name,
+                                            const std::vector<std::string>& channels);
+
 /// Splits a channel name into layer and component at the last dot.
 void split_channel_name(const std::string& channel, std::string& layer, std::string& component);
 

@@ -13,9 +13,61 @@
 #include <algorithm>
 #include <cstdint>
 #include <cstring>
+#include <map>
 
 namespace modestack::io {
 namespace {
+
+// Checks part `part` of `frame` (after part 0) against part 0, the frame the
+// sequence is checked as: a multi-part frame is one image of several parts.
+void check_part(const detail::OpenFrame& frame, const detail::OpenPart& part)
+{
+    const OIIO::ImageSpec& first = frame.parts.front().spec;
+    const OIIO::ImageSpec& spec = part.spec;
+    const std::string label = part.name.empty() ? fmt::format("part {}", part.subimage)
+                                                : fmt::format("part {} '{}'", part.subimage, part.name);
+    auto refuse = [&](const std::string& problem) {
+        return Error(ErrorKind::BadInput, fmt::format("{} {}", label, problem), frame.file,
+                     frame.frame_number);
+    };
+    if (spec.deep)
+        throw refuse("is deep; deep images are not supported");
+    if (spec.width <= 0 || spec.height <= 0)
+        throw refuse("has no pixels");
+    if (spec.x != first.x || spec.y != first.y || spec.width != first.width || spec.height != first.height)
+        throw refuse(fmt::format("has data window {}, part 0 {}: the parts of a frame must share one window",
+                                 describe_window(spec.x, spec.y, spec.width, spec.height),
+                                 describe_window(first.x, first.y, first.width, first.height)));
+}
+
+// The frame's channels as one image: part 0's spec with every part's channels,
+// named as part_channel_names says. Two parts naming one channel alike are refused.
+OIIO::ImageSpec combined_spec(const detail::OpenFrame& frame)
+{
+    OIIO::ImageSpec spec = frame.parts.front().spec;
+    spec.channelnames.clear();
+    spec.channelformats.clear();
+    std::map<std::string, const detail::OpenPart*> owners;
+    for (const detail::OpenPart& part : frame.parts) {
+        const std::vector<std::string> names = part_channel_names(part.name, part.spec.channelnames);
+        for (int c = 0; c < part.spec.nchannels; ++c) {
+            const std::string& name = names[c];
+            if (auto [owner, added] = owners.emplace(name, &part); !added)
+                throw Error(ErrorKind::BadInput,
+                            fmt::format("channel '{}' is in part {} and part {}: a layer must be in one part",
+                                        name, owner->second->subimage, part.subimage),
+                            frame.file, frame.frame_number);
+            spec.channelnames.push_back(name);
+            spec.channelformats.push_back(part.spec.channelformat(c));
+        }
+    }
+    spec.nchannels = static_cast<int>(spec.channelnames.size());
+    spec.format = spec.channelformats.front();
+    // The parts' own bookkeeping is not the frame's (a --single-part output must not claim a part).
+    for (const char* name : {"oiio:subimagename", "oiio:subimages", "name", "type", "openexr:chunkCount"})
+        spec.erase_attribute(name);
+    return spec;
+}
 
 std::unique_ptr<detail::OpenFrame> open_frame(const std::string& file, int frame_number, ExrCodec codec)
 {
@@ -23,42 +75,65 @@ std::unique_ptr<detail::OpenFrame> open_frame(const std::string& file, int frame
     frame->file = file;
     frame->frame_number = frame_number;
     frame->input = detail::open_checked_image(file, frame_number);
-    frame->spec = frame->input->spec();
-    if (frame->spec.deep)
-        throw Error(ErrorKind::BadInput, "deep images are not supported", file, frame_number);
-    if (frame->input->seek_subimage(1, 0))
-        throw Error(ErrorKind::BadInput, "multi-part files are not supported (write a single-part EXR)", file,
-                    frame_number);
+    for (int subimage = 0; frame->input->seek_subimage(subimage, 0); ++subimage) {
+        detail::OpenPart part;
+        part.subimage = subimage;
+        part.spec = frame->input->spec();
+        // A single-part file is presented as it is, whatever name it carries.
+        part.name = part.spec.get_string_attribute("oiio:subimagename");
+        frame->parts.push_back(std::move(part));
+    }
     frame->input->seek_subimage(0, 0);
-    if (frame->spec.width <= 0 || frame->spec.height <= 0)
+    if (frame->parts.empty())
+        throw Error(ErrorKind::BadInput, "image has no parts", file, frame_number);
+    if (frame->parts.front().spec.deep)
+        throw Error(ErrorKind::BadInput, "deep images are not supported", file, frame_number);
+    if (frame->parts.front().spec.width <= 0 || frame->parts.front().spec.height <= 0)
         throw Error(ErrorKind::BadInput, "image has no pixels", file, frame_number);
+    if (frame->parts.size() == 1) {
+        frame->parts.front().name.clear();
+        frame->spec = frame->parts.front().spec;
+    } else {
+        for (size_t p = 1; p < frame->parts.size(); ++p)
+            check_part(*frame, frame->parts[p]);
+        frame->spec = combined_spec(*frame);
+    }
     size_t offset = 0;
     for (int c = 0; c < frame->spec.nchannels; ++c) {
         frame->byte_offset.push_back(offset);
         offset += frame->spec.channelformat(c).size();
     }
     frame->native_pixel_bytes = offset;
-    if (codec == ExrCodec::Libdeflate)
-        frame->zip_layout = detail::zip_layout(*frame);
+    int first_channel = 0;
+    for (detail::OpenPart& part : frame->parts) {
+        part.first_channel = first_channel;
+        part.byte_offset = frame->byte_offset[first_channel];
+        first_channel += part.spec.nchannels;
+        part.native_pixel_bytes =
+            (first_channel < frame->spec.nchannels ? frame->byte_offset[first_channel] : offset) -
+            part.byte_offset;
+        if (codec == ExrCodec::Libdeflate)
+            part.zip_layout = detail::zip_layout(*frame, part);
+    }
     return frame;
 }
 
-// Reads rows of channels [channel_begin, channel_end) of a scanline or tiled
-// file in `type`, tightly packed.
-void read_rows(const detail::OpenFrame& frame, int row_begin, int row_end, int channel_begin, int channel_end,
-               OIIO::TypeDesc type, void* destination)
+// Reads rows of channels [channel_begin, channel_end) of one scanline or tiled
+// part (its own channel indices) in `type`, tightly packed.
+void read_part_rows(const detail::OpenFrame& frame, const detail::OpenPart& part, int row_begin, int row_end,
+                    int channel_begin, int channel_end, OIIO::TypeDesc type, void* destination)
 {
-    const OIIO::ImageSpec& spec = frame.spec;
-    if (frame.zip_layout && type == OIIO::TypeUnknown) {
-        detail::read_zip_rows(frame, *frame.zip_layout, row_begin, row_end, channel_begin, channel_end,
+    const OIIO::ImageSpec& spec = part.spec;
+    if (part.zip_layout && type == OIIO::TypeUnknown) {
+        detail::read_zip_rows(frame, *part.zip_layout, row_begin, row_end, channel_begin, channel_end,
                               static_cast<unsigned char*>(destination));
         return;
     }
     int y_begin = spec.y + row_begin, y_end = spec.y + row_end;
     bool ok;
     if (spec.tile_width == 0) {
-        ok = frame.input->read_scanlines(0, 0, y_begin, y_end, spec.z, channel_begin, channel_end, type,
-                                         destination);
+        ok = frame.input->read_scanlines(part.subimage, 0, y_begin, y_end, spec.z, channel_begin, channel_end,
+                                         type, destination);
     } else {
         // Tiles must be read whole: read the tile rows that cover the band, then copy.
         int tile_y0 = spec.y + (row_begin / spec.tile_height) * spec.tile_height;
@@ -69,8 +144,8 @@ void read_rows(const detail::OpenFrame& frame, int row_begin, int row_end, int c
             pixel_bytes += type == OIIO::TypeUnknown ? spec.channelformat(c).size() : type.size();
         size_t row_bytes = pixel_bytes * spec.width;
         std::vector<unsigned char> tiles(row_bytes * (tile_y1 - tile_y0));
-        ok = frame.input->read_tiles(0, 0, spec.x, spec.x + spec.width, tile_y0, tile_y1, spec.z, spec.z + 1,
-                                     channel_begin, channel_end, type, tiles.data());
+        ok = frame.input->read_tiles(part.subimage, 0, spec.x, spec.x + spec.width, tile_y0, tile_y1, spec.z,
+                                     spec.z + 1, channel_begin, channel_end, type, tiles.data());
         if (ok)
             std::memcpy(destination, tiles.data() + (y_begin - tile_y0) * row_bytes, row_bytes * (row_end - row_begin));
     }
@@ -78,6 +153,60 @@ void read_rows(const detail::OpenFrame& frame, int row_begin, int row_end, int c
         throw Error(ErrorKind::BadInput,
                     fmt::format("cannot read rows {}-{} ({})", row_begin, row_end - 1, frame.input->geterror()),
                     frame.file, frame.frame_number);
+}
+
+// Reads rows of channels [channel_begin, channel_end) of the frame (every
+// part's, in part order) in `type`, tightly packed per pixel.
+void read_rows(const detail::OpenFrame& frame, int row_begin, int row_end, int channel_begin, int channel_end,
+               OIIO::TypeDesc type, void* destination)
+{
+    if (!frame.multipart()) {
+        read_part_rows(frame, frame.parts.front(), row_begin, row_end, channel_begin, channel_end, type,
+                       destination);
+        return;
+    }
+    auto value_bytes = [&](int channel) {
+        return type == OIIO::TypeUnknown ? frame.spec.channelformat(channel).size() : type.size();
+    };
+    size_t pixel_bytes = 0;
+    for (int c = channel_begin; c < channel_end; ++c)
+        pixel_bytes += value_bytes(c);
+    const size_t pixels = static_cast<size_t>(frame.spec.width) * (row_end - row_begin);
+    auto* out = static_cast<unsigned char*>(destination);
+    thread_local std::vector<unsigned char> part_rows;
+    size_t out_offset = 0; // of the part's first read channel in an output pixel
+    for (const detail::OpenPart& part : frame.parts) {
+        const int begin = std::max(channel_begin, part.first_channel);
+        const int end = std::min(channel_end, part.first_channel + part.spec.nchannels);
+        if (begin >= end)
+            continue;
+        size_t part_pixel_bytes = 0;
+        for (int c = begin; c < end; ++c)
+            part_pixel_bytes += value_bytes(c);
+        part_rows.resize(pixels * part_pixel_bytes);
+        read_part_rows(frame, part, row_begin, row_end, begin - part.first_channel, end - part.first_channel,
+                       type, part_rows.data());
+        for (size_t p = 0; p < pixels; ++p)
+            std::memcpy(out + p * pixel_bytes + out_offset, part_rows.data() + p * part_pixel_bytes,
+                        part_pixel_bytes);
+        out_offset += part_pixel_bytes;
+    }
+}
+
+// Scanlines per compressed chunk of a part (see chunk_rows()).
+int part_chunk_rows(const OIIO::ImageSpec& spec)
+{
+    if (spec.tile_height > 0)
+        return spec.tile_height;
+    const std::string compression = spec.get_string_attribute("compression", "none");
+    if (compression == "zip")
+        return 16;
+    if (compression == "dwab")
+        return 256;
+    if (compression == "piz" || compression == "pxr24" || compression == "b44" || compression == "b44a" ||
+        compression == "dwaa")
+        return 32;
+    return 1; // none, rle, zips
 }
 
 }  // namespace
@@ -207,18 +336,10 @@ bool SequenceReader::has_unselected_channels(int frame_index) const
 
 int SequenceReader::chunk_rows(int frame_index) const
 {
-    const OIIO::ImageSpec& spec = m_frames.at(frame_index)->spec;
-    if (spec.tile_height > 0)
-        return spec.tile_height;
-    const std::string compression = spec.get_string_attribute("compression", "none");
-    if (compression == "zip")
-        return 16;
-    if (compression == "dwab")
-        return 256;
-    if (compression == "piz" || compression == "pxr24" || compression == "b44" || compression == "b44a" ||
-        compression == "dwaa")
-        return 32;
-    return 1;  // none, rle, zips
+    int rows = 1;
+    for (const detail::OpenPart& part : m_frames.at(frame_index)->parts)
+        rows = std::max(rows, part_chunk_rows(part.spec));
+    return rows;
 }
 
 std::size_t SequenceReader::native_pixel_bytes(int frame_index) const

@@ -1,9 +1,14 @@
 // The input side of every command that reads a frame sequence: opens every frame
 // once, checks before any work that the frames agree (same data window, the
-// selected channels present everywhere, single-part, not deep), then reads
-// bands of scanlines of the selected channels as float, or of all channels in
-// their native pixel types for bit-exact pass-through. Works on scanline and
-// tiled files; never loads a whole frame unless asked for all its rows.
+// selected channels present everywhere, not deep), then reads bands of
+// scanlines of the selected channels as float, or of all channels in their
+// native pixel types for bit-exact pass-through. Works on scanline and tiled
+// files, single- or multi-part: a multi-part frame is read as one image of
+// every part's channels, those of a part with bare channels (`R`, as Arnold,
+// Karma and Nuke write a part per layer) in the layer the part's name makes
+// (`<part name>.R`), those of a part whose channels all carry a layer as they
+// are; its parts must share one data window. Never loads a whole frame unless
+// asked for all its rows.
 #pragma once
 
 #include "io/exr_codec.h"

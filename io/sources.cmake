@@ -11,6 +11,7 @@ target_sources(modestack_io PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/detail/exr_core.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_output.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/zip_scanline_writer.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/detail/multipart_writer.cpp
   ${CMAKE_CURRENT_LIST_DIR}/half_conversion.cpp
   ${CMAKE_CURRENT_LIST_DIR}/text_output.cpp
   ${CMAKE_CURRENT_LIST_DIR}/temporary_file.cpp

@@ -38,18 +38,19 @@ CoreReadContext::~CoreReadContext()
         exr_finish(&context);
 }
 
-bool read_zip_part(exr_const_context_t context, const OIIO::ImageSpec& spec, ZipPart& part)
+bool read_zip_part(exr_const_context_t context, int part_index, const OIIO::ImageSpec& spec, ZipPart& part)
 {
     if (spec.tile_width != 0 || spec.depth > 1 || spec.deep)
         return false;
     int parts = 0;
     exr_storage_t storage = EXR_STORAGE_LAST_TYPE;
-    if (exr_get_count(context, &parts) != EXR_ERR_SUCCESS || parts != 1 ||
-        exr_get_storage(context, 0, &storage) != EXR_ERR_SUCCESS || storage != EXR_STORAGE_SCANLINE ||
-        exr_get_compression(context, 0, &part.compression) != EXR_ERR_SUCCESS ||
+    if (exr_get_count(context, &parts) != EXR_ERR_SUCCESS || part_index < 0 || part_index >= parts ||
+        exr_get_storage(context, part_index, &storage) != EXR_ERR_SUCCESS ||
+        storage != EXR_STORAGE_SCANLINE ||
+        exr_get_compression(context, part_index, &part.compression) != EXR_ERR_SUCCESS ||
         (part.compression != EXR_COMPRESSION_ZIP && part.compression != EXR_COMPRESSION_ZIPS) ||
-        exr_get_channels(context, 0, &part.channels) != EXR_ERR_SUCCESS ||
-        exr_get_data_window(context, 0, &part.data_window) != EXR_ERR_SUCCESS)
+        exr_get_channels(context, part_index, &part.channels) != EXR_ERR_SUCCESS ||
+        exr_get_data_window(context, part_index, &part.data_window) != EXR_ERR_SUCCESS)
         return false;
     const exr_attr_box2i_t& window = part.data_window;
     if (window.max.x - window.min.x + 1 != spec.width || window.max.y - window.min.y + 1 != spec.height ||

@@ -28,7 +28,7 @@ struct CoreReadContext {
     CoreReadContext& operator=(const CoreReadContext&) = delete;
 };
 
-/// What the ZIP reader and writer read of a file they can handle exactly: one
+/// What the ZIP reader and writer read of a part they can handle exactly: a
 /// scanline part, ZIP or ZIPS, no subsampled channel, and the data window and
 /// channel count OpenImageIO reports in its spec.
 struct ZipPart {
@@ -38,8 +38,9 @@ struct ZipPart {
     int lines_per_chunk() const { return compression == EXR_COMPRESSION_ZIP ? 16 : 1; }
 };
 
-/// Fills `part` from `context` (a file whose OpenImageIO spec is `spec`); false
-/// when the file is not such a file (the caller then uses OpenImageIO).
-bool read_zip_part(exr_const_context_t context, const OIIO::ImageSpec& spec, ZipPart& part);
+/// Fills `part` from part `part_index` of `context` (a part whose OpenImageIO
+/// spec is `spec`); false when it is not such a part (the caller then uses
+/// OpenImageIO).
+bool read_zip_part(exr_const_context_t context, int part_index, const OIIO::ImageSpec& spec, ZipPart& part);
 
 }  // namespace modestack::io::detail

@@ -47,14 +47,15 @@ void undo_difference_and_split(unsigned char* predicted, std::size_t count, unsi
 
 }  // namespace
 
-std::shared_ptr<const ZipLayout> zip_layout(const OpenFrame& frame)
+std::shared_ptr<const ZipLayout> zip_layout(const OpenFrame& frame, const OpenPart& open_part)
 {
-    const OIIO::ImageSpec& spec = frame.spec;
+    const OIIO::ImageSpec& spec = open_part.spec;
     CoreReadContext input(frame.file);
     ZipPart part;
-    if (!input.context || !read_zip_part(input.context, spec, part))
+    if (!input.context || !read_zip_part(input.context, open_part.subimage, spec, part))
         return nullptr;
     auto layout = std::make_shared<ZipLayout>();
+    layout->part = open_part.subimage;
     layout->lines_per_chunk = part.lines_per_chunk();
     layout->first_y = part.data_window.min.y;
     std::map<std::string, std::pair<std::size_t, std::size_t>> places;  // name → offset, bytes
@@ -96,13 +97,14 @@ void read_zip_rows(const OpenFrame& frame, const ZipLayout& layout, int row_begi
     const int lines = layout.lines_per_chunk;
     for (int chunk_row = row_begin - row_begin % lines; chunk_row < row_end; chunk_row += lines) {
         exr_chunk_info_t chunk;
-        if (exr_read_scanline_chunk_info(input.context, 0, layout.first_y + chunk_row, &chunk) != EXR_ERR_SUCCESS)
+        if (exr_read_scanline_chunk_info(input.context, layout.part, layout.first_y + chunk_row, &chunk) !=
+            EXR_ERR_SUCCESS)
             fail(last_core_message());
         const std::size_t raw_bytes = static_cast<std::size_t>(chunk.height) * layout.row_bytes;
         if (chunk.unpacked_size != raw_bytes || chunk.packed_size > chunk.unpacked_size || chunk.packed_size == 0)
             fail(fmt::format("corrupt chunk at row {}: sizes do not match the header", chunk_row));
         packed.resize(chunk.packed_size);
-        if (exr_read_chunk(input.context, 0, &chunk, packed.data()) != EXR_ERR_SUCCESS)
+        if (exr_read_chunk(input.context, layout.part, &chunk, packed.data()) != EXR_ERR_SUCCESS)
             fail(last_core_message());
         const unsigned char* rows = packed.data();
         if (chunk.packed_size < chunk.unpacked_size) {  // equal sizes: stored as is

@@ -108,14 +108,14 @@ std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& pa
                                                            const std::vector<HeaderAttribute>& attributes)
 {
     const OIIO::ImageSpec& spec = source.spec;
-    if (source.selected.empty())
+    if (source.selected.empty() || source.parts.size() != 1)
         return nullptr;
 
     // Only what this writer can copy exactly (the OpenImageIO path reports what is wrong with the rest).
     CoreReadContext input(source.file);
     ZipPart input_part;
     exr_attr_box2i_t display_window{};
-    if (!input.context || !read_zip_part(input.context, spec, input_part) ||
+    if (!input.context || !read_zip_part(input.context, 0, spec, input_part) ||
         exr_get_display_window(input.context, 0, &display_window) != EXR_ERR_SUCCESS)
         return nullptr;
     const exr_attr_chlist_t* input_channels = input_part.channels;

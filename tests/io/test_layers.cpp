@@ -73,3 +73,20 @@ TEST_CASE("layers: a selector matching two view layers is ambiguous and unknown 
     CHECK_THROWS_WITH_AS(io::select_layers(channels, {"GlossInd"}, "f.exr"), doctest::Contains("left.DiffInd [R,G,B]"),
                          Error);
 }
+
+TEST_CASE("layers: a multi-part file's part of bare channels names their layer, others keep theirs")
+{
+    using V = std::vector<std::string>;
+    // Arnold/Karma/Nuke: a part per AOV, channels bare; sigma added by denoise reads back under the layer
+    // too.
+    CHECK(io::part_channel_names("diffuse_indirect", {"R", "G", "B", "sigma.R"}) ==
+          V{"diffuse_indirect.R", "diffuse_indirect.G", "diffuse_indirect.B", "diffuse_indirect.sigma.R"});
+    // Channels that all carry a layer stay as they are, whatever the part's name.
+    CHECK(io::part_channel_names("aux", {"Normal.X", "ViewLayer.Depth.Z"}) ==
+          V{"Normal.X", "ViewLayer.Depth.Z"});
+    // A part without a name (a single-part file) keeps bare names.
+    CHECK(io::part_channel_names("", {"R", "G", "B"}) == V{"R", "G", "B"});
+    // --layer finds the part's layer.
+    const V names = io::part_channel_names("diffuse_indirect", {"R", "G", "B"});
+    CHECK(io::select_layers(names, {"diffuse_indirect"}, "f.exr").front().channel_names == names);
+}

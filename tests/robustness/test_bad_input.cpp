@@ -131,7 +131,11 @@ TEST_CASE("denoise: broken sequences and broken files exit 1 naming the file, no
         {"denoise " + dir.file("folder.####.exr") + " --frames 1-5" + out, 1,
          "folder.0003.exr: is a directory, not an image file"},
         {"denoise " + dir.file("single.####.exr") + out, 1, "single.####.exr: denoising needs at least 3 frames, found 1"},
-        {"denoise " + dir.file("parts.####.exr") + out, 1, "parts.0001.exr: multi-part files are not supported"},
+        // Multi-part files are read (tests/e2e/test_multipart_cli.cpp): parts of bare R, G, B are layers.
+        {"denoise " + dir.file("parts.####.exr") + out, 1,
+         "parts.0001.exr: several RGB layers; choose with --layer (layers: part0 [R,G,B], part1 [R,G,B])"},
+        {"denoise " + dir.file("parts.####.exr") + " --layer part2" + out, 1,
+         "parts.0001.exr: layer 'part2' not found"},
         {"denoise " + dir.file("in.####.exr") + " --layer DiffInd" + out, 1, "in.0001.exr: layer 'DiffInd' not found"},
     };
     for (size_t i = 0; i < kDamages.size(); ++i) {
