@@ -114,6 +114,13 @@ Subcommand add_denoise_command(CLI::App& parent)
     command->add_option("--conventions", options->conventions,
                         "Renderer conventions table (JSON) to use instead of the one shipped with modestack "
                         "(share/modestack/conventions.json; man page, RENDERER CONVENTIONS)");
+    command->add_flag(
+        "--update-beauty", options->update_beauty,
+        "Keep the beauty in step with the denoised layers: beauty + sum of colour x (denoised - "
+        "noisy), alpha untouched, and its sigma <beauty>.sigma (default: on when the renderer "
+        "conventions compose the beauty of the denoised layers; else off, and --json says why)");
+    command->add_flag("--no-update-beauty", options->no_update_beauty,
+                      "Copy the beauty untouched, like every channel that is not denoised");
     command->add_flag("--skip-existing", options->skip_existing,
                       "Do not rewrite output frames that exist already (farm re-runs)");
     command->add_option("--colorspace", options->colorspace,
