@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <map>
 
 using namespace modestack;
@@ -118,59 +119,99 @@ void check_same_outputs(const std::string& a, const std::string& b)
     }
 }
 
-// A copy of each frame of the own shot as Arnold writes its AOVs: the light already
-// multiplied by its colour (diffuse_direct = DiffCol × DiffDir), the beauty bare RGBA.
-void write_arnold_shot(const TempDir& dir)
+// One layer of a restyled shot: its name ("" = the bare R, G, B, A), components, and
+// each component's value from the own frame (`at(channel)`).
+struct StyledLayer {
+    std::string name;
+    std::vector<std::string> components;
+    std::function<float(const std::function<float(const std::string&)>& at, const std::string& component)>
+        value;
+};
+
+// A copy of each frame of the own shot, dir/<style>.####.exr, made of `layers` (half) with `attribute` set.
+void write_styled_shot(const TempDir& dir, const std::string& style, const std::vector<StyledLayer>& layers,
+                       const std::pair<std::string, std::string>& attribute)
 {
     for (int frame = 1; frame <= kFrames; ++frame) {
-        const std::string from = dir.file(fmt::format("own.{:04d}.exr", frame));
-        auto input = OIIO::ImageInput::open(from);
+        auto input = OIIO::ImageInput::open(dir.file(fmt::format("own.{:04d}.exr", frame)));
         REQUIRE(input);
         const OIIO::ImageSpec& spec = input->spec();
         std::vector<float> pixels(static_cast<size_t>(spec.width) * spec.height * spec.nchannels);
         REQUIRE(input->read_image(0, 0, 0, spec.nchannels, OIIO::TypeFloat, pixels.data()));
-        auto at = [&](size_t p, const std::string& channel) {
-            return pixels[p * spec.nchannels + static_cast<size_t>(spec.channelindex(channel))];
-        };
-        const std::vector<std::string> components{"R", "G", "B"};
-        std::vector<std::string> names{"R", "G", "B", "A"};
-        for (const char* layer : {"diffuse_albedo", "diffuse_direct", "diffuse_indirect", "emission",
-                                  "diffuse", "diffuse_indirect_variance"})
-            for (const std::string& c : components)
-                names.push_back(fmt::format("{}.{}", layer, c));
-        names.insert(names.end(), {"N.X", "N.Y", "N.Z", "Z"});
+        std::vector<std::string> names;
+        for (const StyledLayer& layer : layers)
+            for (const std::string& c : layer.components)
+                names.push_back(layer.name.empty() ? c : layer.name + "." + c);
         OIIO::ImageSpec out(spec.width, spec.height, static_cast<int>(names.size()), OIIO::TypeHalf);
         out.channelnames = names;
         out.alpha_channel = -1;
         out.attribute("compression", "zip");
-        out.attribute("arnold/version", "Arnold 7.2.1.0");
+        out.attribute(attribute.first, attribute.second);
         std::vector<float> values;
         for (size_t p = 0; p < static_cast<size_t>(spec.width) * spec.height; ++p) {
-            for (const char* c : {"R", "G", "B", "A"})
-                values.push_back(at(p, std::string("Combined.") + c));
-            for (const std::string& c : components)
-                values.push_back(at(p, "DiffCol." + c));
-            for (const std::string& c : components)
-                values.push_back(at(p, "DiffCol." + c) * at(p, "DiffDir." + c));
-            for (const std::string& c : components)
-                values.push_back(at(p, "DiffCol." + c) * at(p, "DiffInd." + c));
-            for (const std::string& c : components)
-                values.push_back(at(p, "Emit." + c));
-            for (const std::string& c : components)
-                values.push_back(at(p, "DiffCol." + c) * (at(p, "DiffDir." + c) + at(p, "DiffInd." + c)));
-            for (const std::string& c : components)
-                values.push_back(at(p, "DiffCol." + c) * at(p, "DiffCol." + c) * at(p, "DiffIndVar." + c));
-            for (const char* c : {"X", "Y", "Z"})
-                values.push_back(at(p, std::string("Normal.") + c));
-            values.push_back(at(p, "Depth.Z"));
+            auto at = [&](const std::string& channel) {
+                return pixels[p * spec.nchannels + static_cast<size_t>(spec.channelindex(channel))];
+            };
+            for (const StyledLayer& layer : layers)
+                for (const std::string& c : layer.components)
+                    values.push_back(layer.value(at, c));
         }
-        const std::string to = dir.file(fmt::format("arnold.{:04d}.exr", frame));
+        const std::string to = dir.file(fmt::format("{}.{:04d}.exr", style, frame));
         auto output = OIIO::ImageOutput::create(to);
         REQUIRE(output);
         REQUIRE(output->open(to, out));
         REQUIRE(output->write_image(OIIO::TypeFloat, values.data()));
         REQUIRE(output->close());
     }
+}
+
+using At = std::function<float(const std::string&)>;
+const std::vector<std::string> kRgb{"R", "G", "B"};
+float beauty_of(const At& at, const std::string& c)
+{
+    return at("Combined." + c);
+}
+float albedo(const At& at, const std::string& c)
+{
+    return at("DiffCol." + c);
+}
+float direct(const At& at, const std::string& c)
+{
+    return at("DiffCol." + c) * at("DiffDir." + c);
+}
+float indirect(const At& at, const std::string& c)
+{
+    return at("DiffCol." + c) * at("DiffInd." + c);
+}
+float raw_indirect(const At& at, const std::string& c)
+{
+    return at("DiffInd." + c);
+}
+float emission(const At& at, const std::string& c)
+{
+    return at("Emit." + c);
+}
+
+// The own shot as Arnold writes its AOVs: the light already multiplied by its colour
+// (diffuse_direct = DiffCol × DiffDir), a combined `diffuse`, the beauty bare RGBA.
+void write_arnold_shot(const TempDir& dir)
+{
+    write_styled_shot(
+        dir, "arnold",
+        {{"", {"R", "G", "B", "A"}, beauty_of},
+         {"diffuse_albedo", kRgb, albedo},
+         {"diffuse_direct", kRgb, direct},
+         {"diffuse_indirect", kRgb, indirect},
+         {"emission", kRgb, emission},
+         {"diffuse", kRgb,
+          [](const At& at, const std::string& c) { return direct(at, c) + indirect(at, c); }},
+         {"diffuse_indirect_variance", kRgb,
+          [](const At& at, const std::string& c) {
+              return at("DiffCol." + c) * at("DiffCol." + c) * at("DiffIndVar." + c);
+          }},
+         {"N", {"X", "Y", "Z"}, [](const At& at, const std::string& c) { return at("Normal." + c); }},
+         {"", {"Z"}, [](const At& at, const std::string&) { return at("Depth.Z"); }}},
+        {"arnold/version", "Arnold 7.2.1.0"});
 }
 
 } // namespace
@@ -372,4 +413,39 @@ TEST_CASE("denoise --update-beauty on the Cycles shot: Combined moves by DiffCol
         CAPTURE(frame);
         CHECK(off == 0);
     }
+}
+
+TEST_CASE("denoise --update-beauty on a V-Ray-style raw layer: the beauty and the product AOV move by the "
+          "diffuse filter x the change")
+{
+    TempDir dir;
+    render_own_shot(dir);
+    write_styled_shot(dir, "vray",
+                      {{"", {"R", "G", "B", "A"}, beauty_of},
+                       {"VRayDiffuseFilter", kRgb, albedo},
+                       {"VRayLighting", kRgb, direct},
+                       {"VRayRawGlobalIllumination", kRgb, raw_indirect},
+                       {"VRayGlobalIllumination", kRgb, indirect},
+                       {"VRaySelfIllumination", kRgb, emission}},
+                      {"vray/version", "V-Ray 6"});
+    run_ok(fmt::format("denoise {} --layer VRayRawGlobalIllumination -q -o {} --json {}",
+                       dir.file("vray.####.exr"), dir.file("on/d.####.exr"), dir.file("on.json")));
+    const nlohmann::json on = load_json(dir.file("on.json"));
+    CHECK(on["renderer"]["name"] == "vray");
+    CHECK(on["beauty"]["updated"] == true);
+    CHECK(on["beauty"]["formula"] ==
+          "the unnamed R, G, B += VRayDiffuseFilter * (denoised - noisy VRayRawGlobalIllumination)");
+    CHECK(on["beauty"]["products"][0]["layer"] == "VRayGlobalIllumination");
+    check_composite(dir.file("on/d"), "",
+                    {{"", "VRayLighting"}, {"", "VRayGlobalIllumination"}, {"", "VRaySelfIllumination"}},
+                    dir.file("vray"));
+    check_composite(dir.file("on/d"), "VRayGlobalIllumination",
+                    {{"VRayDiffuseFilter", "VRayRawGlobalIllumination"}}, dir.file("vray"));
+    CHECK(!same_bits(rgb(frame_file(dir.file("vray"), 2), "VRayGlobalIllumination"),
+                     rgb(frame_file(dir.file("on/d"), 2), "VRayGlobalIllumination")));
+    // The raw layer and its product denoised together would count that light twice.
+    run_ok(fmt::format(
+        "denoise {} --layer VRayRawGlobalIllumination --layer VRayGlobalIllumination -q -o {} --json {}",
+        dir.file("vray.####.exr"), dir.file("twice/d.####.exr"), dir.file("twice.json")));
+    CHECK(load_json(dir.file("twice.json"))["beauty"]["updated"] == false);
 }
