@@ -118,6 +118,13 @@ Subcommand add_denoise_command(CLI::App& parent)
         "--single-part", options->single_part,
         "Write a multi-part input's outputs as single-part files, every channel named by its layer "
         "(default: the input's parts, names and headers, each sigma in its layer's part)");
+    command->add_flag(
+        "--update-beauty", options->update_beauty,
+        "Keep the beauty in step with the denoised layers: beauty + sum of colour x (denoised - "
+        "noisy), alpha untouched, and its sigma <beauty>.sigma (default: on when the renderer "
+        "conventions compose the beauty of the denoised layers; else off, and --json says why)");
+    command->add_flag("--no-update-beauty", options->no_update_beauty,
+                      "Copy the beauty untouched, like every channel that is not denoised");
     command->add_flag("--skip-existing", options->skip_existing,
                       "Do not rewrite output frames that exist already (farm re-runs)");
     command->add_option("--colorspace", options->colorspace,

@@ -7,6 +7,7 @@
 // (app/color_adapters.h).
 #include "app/denoise_job.h"
 
+#include "app/beauty_update.h"
 #include "app/color_adapters.h"
 #include "app/command.h"
 #include "app/memory_budget.h"
@@ -274,6 +275,9 @@ DenoiseJob make_denoise_job(const DenoiseCommandOptions& options, const CLI::App
     // An explicit list asks for each guide; auto takes what the input has.
     job.guides_required = options.mode_filter_guides != std::vector<std::string>{"auto"} &&
                           options.mode_filter_guides != std::vector<std::string>{"none"};
+    if (options.update_beauty && options.no_update_beauty)
+        throw usage_error("--update-beauty and --no-update-beauty contradict each other: give one");
+    job.update_beauty = options.update_beauty ? "on" : options.no_update_beauty ? "off" : "auto";
     job.exr_codec = options.exr_codec;
     job.part_layout = options.single_part ? io::PartLayout::SinglePart : io::PartLayout::AsInput;
     job.surface_filter = !options.no_mode_filter;
@@ -378,7 +382,13 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
     SequenceSink sink(reader, paths, job.save_modes);
     sink.write_rank_map_to(job.rank_map);
     sink.set_part_layout(job.part_layout);
+    BeautyPlan beauty = plan_beauty_update(renderer, reader, job.update_beauty, color.converter == nullptr);
     std::vector<io::HeaderAttribute> attributes = provenance_attributes(input);
+    if (beauty.update && writes_frames) {
+        attributes.push_back(
+            io::HeaderAttribute::of_text("modestack:beauty", beauty_formula(beauty.targets.front())));
+        sink.update_beauty(std::make_unique<BeautyUpdate>(reader, beauty));
+    }
     append_color_attributes(attributes, color);
     if (job.transform.kind != denoise::TransformKind::None)
         attributes.push_back(
@@ -441,6 +451,7 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
     for (const auto& layer : reader.layers())
         result.layers.push_back({layer.name, layer.channel_names, layer.sigma_names});
     result.renderer = renderer_json(renderer, source.auxiliary_lookups());
+    result.beauty = beauty_json(beauty);
     result.rank_map = job.rank_map;
     result.max_memory_bytes = max_memory_bytes;
     result.non_negative = settings.non_negative != denoise::NonNegativeMode::Off;

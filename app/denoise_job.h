@@ -51,6 +51,8 @@ struct DenoiseCommandOptions {
     std::vector<std::string> mode_filter_guides{"auto"};
     std::string renderer = "auto"; ///< --renderer
     std::string conventions;       ///< --conventions FILE ("" = the shipped table)
+    bool update_beauty = false;    ///< --update-beauty
+    bool no_update_beauty = false; ///< --no-update-beauty
     std::string rank_map;
     bool skip_existing = false;
     std::string colorspace;
@@ -80,6 +82,7 @@ struct DenoiseJob {
     std::string renderer = "auto";    ///< --renderer
     std::shared_ptr<const ConventionTable> conventions; ///< the table --conventions names, or the shipped one
     bool guides_required = false; ///< --mode-filter-guides named them: each must be found
+    std::string update_beauty = "auto"; ///< auto, on (--update-beauty), off (--no-update-beauty)
     io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;
     io::PartLayout part_layout = io::PartLayout::AsInput; ///< --single-part flattens multi-part inputs
     bool surface_filter = true;       ///< object space: filter over the surfaces
@@ -112,6 +115,8 @@ struct DenoiseResult {
     std::vector<DenoisedLayer> layers;
     /// The renderer conventions used and the guide and variance layers found (renderer_json).
     nlohmann::ordered_json renderer;
+    /// What --update-beauty did to the beauty, and why (beauty_json).
+    nlohmann::ordered_json beauty;
     std::string rank_map;        ///< the --rank-map file
     double seconds = 0;
     std::int64_t peak_memory_bytes = 0;  ///< the process's, when the run ended

@@ -124,6 +124,8 @@ nlohmann::ordered_json denoise_json(const DenoiseResult& result)
     json["layers"] = layers;
     if (!result.renderer.is_null())
         json["renderer"] = result.renderer;
+    if (!result.beauty.is_null())
+        json["beauty"] = result.beauty;
     json["solver"] = report.solver;
     json["passes"] = report.passes;
     json["in_memory"] = report.plan.in_memory;

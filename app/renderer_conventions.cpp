@@ -108,19 +108,26 @@ void read_light_layers(const nlohmann::json& renderer, const std::string& where,
     if (lights == renderer.end())
         return;
     if (!lights->is_array())
-        throw FieldError{where + ".light_layers", "must be a list of {\"layer\", \"colour\", \"product\"}"};
+        throw FieldError{where + ".light_layers",
+                         "must be a list of {\"layer\", \"colour\", \"product\", \"parts\"}"};
     for (size_t i = 0; i < lights->size(); ++i) {
         const std::string at = fmt::format("{}.light_layers[{}]", where, i);
-        check_object((*lights)[i], at, {"layer", "colour", "product"});
-        LightLayer light{text_field((*lights)[i], "layer", at, true),
-                         text_field((*lights)[i], "colour", at, false),
-                         text_field((*lights)[i], "product", at, false)};
+        check_object((*lights)[i], at, {"layer", "colour", "product", "parts"});
+        LightLayer light{
+            text_field((*lights)[i], "layer", at, true), text_field((*lights)[i], "colour", at, false),
+            text_field((*lights)[i], "product", at, false), optional_list((*lights)[i], "parts", at, false)};
         if (light.layer.empty())
             throw FieldError{at + ".layer", "must not be empty"};
         if (convention.light_layer(light.layer))
             throw FieldError{at, fmt::format("names the light layer '{}' twice", light.layer)};
         convention.light_layers.push_back(std::move(light));
     }
+    // A combined layer's parts are light layers of their own (listed anywhere in the list).
+    for (size_t i = 0; i < convention.light_layers.size(); ++i)
+        for (const std::string& part : convention.light_layers[i].parts)
+            if (!convention.light_layer(part) || part == convention.light_layers[i].layer)
+                throw FieldError{fmt::format("{}.light_layers[{}].parts", where, i),
+                                 fmt::format("names '{}', which is not another of its light_layers", part)};
 }
 
 void read_guides_and_variance(const nlohmann::json& renderer, const std::string& where,

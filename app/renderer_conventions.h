@@ -15,11 +15,14 @@ namespace modestack::app {
 /// A light AOV. In the beauty it counts as colour × layer (× 1 when `colour`
 /// is empty: the layer already holds the surface colour); `product`, when set,
 /// is the AOV that holds that product (V-Ray's VRayGlobalIllumination for
-/// VRayRawGlobalIllumination).
+/// VRayRawGlobalIllumination); `parts`, when set, are the light layers whose
+/// sum this layer holds (Arnold's diffuse = diffuse_direct + diffuse_indirect),
+/// so that --update-beauty counts each light once.
 struct LightLayer {
     std::string layer;
     std::string colour;
     std::string product;
+    std::vector<std::string> parts;
 };
 
 /// What a header attribute's value must look like (both fnmatch patterns).

@@ -92,16 +92,10 @@ void add_candidate(std::vector<std::vector<std::string>>& candidates, std::vecto
         candidates.push_back(std::move(selectors));
 }
 
-std::string prefix_of(const std::string& layer)
-{
-    const size_t dot = layer.rfind('.');
-    return dot == std::string::npos ? "" : layer.substr(0, dot + 1);
-}
-
 // The variance names of one denoised layer in `renderer`, best first, full names.
 std::vector<std::string> variance_names(const RendererConvention& renderer, const std::string& layer)
 {
-    const std::string prefix = prefix_of(layer);
+    const std::string prefix = layer_prefix(layer);
     const std::string short_name = layer.substr(prefix.size());
     std::vector<std::string> names;
     if (auto by_layer = renderer.variance_by_layer.find(short_name);
@@ -118,6 +112,12 @@ std::vector<std::string> variance_names(const RendererConvention& renderer, cons
 }
 
 } // namespace
+
+std::string layer_prefix(const std::string& layer)
+{
+    const size_t dot = layer.rfind('.');
+    return dot == std::string::npos ? "" : layer.substr(0, dot + 1);
+}
 
 void check_renderer_name(const ConventionTable& table, const std::string& requested)
 {
@@ -174,7 +174,7 @@ AuxiliaryCandidates auxiliary_candidates(const RendererChoice& choice,
     AuxiliaryCandidates candidates;
     if (layers.empty())
         return candidates;
-    const std::string prefix = prefix_of(layers.front().name);
+    const std::string prefix = layer_prefix(layers.front().name);
     const denoise::Auxiliary guides[] = {denoise::Auxiliary::Albedo, denoise::Auxiliary::Normal,
                                          denoise::Auxiliary::Depth};
     for (const RendererConvention* renderer : choice.conventions) {

@@ -39,6 +39,9 @@ RendererChoice choose_renderer(const ConventionTable& table, const std::string& 
 /// Throws a usage error when `requested` is neither "auto" nor a renderer of `table`.
 void check_renderer_name(const ConventionTable& table, const std::string& requested);
 
+/// The prefix the table's names are relative to: "ViewLayer." of "ViewLayer.DiffInd", "" of "DiffInd".
+std::string layer_prefix(const std::string& layer);
+
 /// The layer selectors tried for each auxiliary kind (by denoise::Auxiliary),
 /// best first; each candidate is one selector list for io::SequenceReader (the
 /// variance candidate has one layer per denoised layer).

@@ -107,6 +107,13 @@ SequenceSink::SequenceSink(const io::SequenceReader& reader, std::vector<std::st
         m_sigma_names.insert(m_sigma_names.end(), layer.sigma_names.begin(), layer.sigma_names.end());
 }
 
+void SequenceSink::update_beauty(std::unique_ptr<BeautyUpdate> update)
+{
+    m_beauty = std::move(update);
+    const std::vector<std::string>& names = m_beauty->plan().sigma_names;
+    m_sigma_names.insert(m_sigma_names.end(), names.begin(), names.end());
+}
+
 void SequenceSink::begin(const denoise::RebuildStart& start)
 {
     std::vector<io::HeaderAttribute> attributes = m_attributes;
@@ -148,6 +155,27 @@ void SequenceSink::write_rows(int frame_index, int row_begin, int row_end, const
             m_reader.read_native(frame_index, row_begin, row_end, decoded);
             native = decoded.data();
         }
+    }
+    if (m_beauty && native) { // the beauty is written from a copy of the rows, the noisy layers still in it
+        const std::size_t pixels = static_cast<std::size_t>(m_reader.width()) * (row_end - row_begin);
+        const std::size_t row_bytes = m_reader.native_pixel_bytes(frame_index) * m_reader.width();
+        thread_local std::vector<unsigned char> updated;
+        updated.assign(native, native + row_bytes * (row_end - row_begin));
+        // The extra channels per pixel: the layers' sigma, then the beauty's.
+        const std::size_t selected = static_cast<std::size_t>(m_reader.selected_channel_count());
+        const std::size_t beauty_sigmas = m_beauty->plan().sigma_names.size();
+        thread_local std::vector<float> beauty_sigma, extra;
+        beauty_sigma.resize(pixels * beauty_sigmas);
+        m_beauty->apply(frame_index, pixels, updated.data(), rebuilt, sigma, beauty_sigma.data());
+        extra.resize(pixels * (selected + beauty_sigmas));
+        for (std::size_t p = 0; p < pixels; ++p) {
+            for (std::size_t c = 0; c < selected; ++c)
+                extra[p * (selected + beauty_sigmas) + c] = sigma ? sigma[p * selected + c] : 0.0f;
+            for (std::size_t c = 0; c < beauty_sigmas; ++c)
+                extra[p * (selected + beauty_sigmas) + selected + c] = beauty_sigma[p * beauty_sigmas + c];
+        }
+        output->write_replaced_rows(row_begin, row_end, updated.data(), rebuilt, extra.data());
+        return;
     }
     output->write_replaced_rows(row_begin, row_end, native, rebuilt, sigma);
 }

@@ -6,6 +6,7 @@
 // channels appended) and, if asked, the spatial modes.
 #pragma once
 
+#include "app/beauty_update.h"
 #include "app/renderer_detection.h"
 #include "core/denoise/frame_stream.h"
 #include "io/frame_output.h"
@@ -80,6 +81,9 @@ public:
     void set_part_layout(io::PartLayout layout) { m_part_layout = layout; }
     /// --rank-map: also writes the per-pixel rank to `path` (one channel "rank").
     void write_rank_map_to(std::string path) { m_rank_map_path = std::move(path); }
+    /// --update-beauty: rewrites the beauty (and product AOVs) in the copied rows
+    /// and appends the beauty's sigma channels. Before begin().
+    void update_beauty(std::unique_ptr<BeautyUpdate> update);
     /// Opens every output under its temporary name.
     void begin(const denoise::RebuildStart& start) override;
     /// Renames every finished output into place.
@@ -105,6 +109,7 @@ private:
     std::vector<std::unique_ptr<io::FrameOutput>> m_mode_outputs;
     std::string m_rank_map_path;
     std::unique_ptr<io::FrameOutput> m_rank_map;
+    std::unique_ptr<BeautyUpdate> m_beauty;
 };
 
 }  // namespace modestack::app

@@ -25,6 +25,7 @@ target_sources(modestack_app PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/sequence_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/renderer_conventions.cpp
   ${CMAKE_CURRENT_LIST_DIR}/renderer_detection.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/beauty_update.cpp
   ${CMAKE_CURRENT_LIST_DIR}/color_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/memory_budget.cpp
   ${CMAKE_CURRENT_LIST_DIR}/method_options.cpp

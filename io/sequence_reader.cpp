@@ -353,4 +353,31 @@ std::size_t SequenceReader::selected_value_bytes(int frame_index) const
     return frame.spec.channelformat(frame.selected.front()).size();
 }
 
+const std::vector<std::string>& SequenceReader::channel_names(int frame_index) const
+{
+    return m_frames.at(frame_index)->spec.channelnames;
+}
+
+void SequenceReader::channels_from_native(int frame_index, const unsigned char* native, std::size_t pixels,
+                                          const std::vector<int>& channels, float* destination) const
+{
+    const detail::OpenFrame& frame = *m_frames.at(frame_index);
+    for (std::size_t k = 0; k < channels.size(); ++k)
+        for (std::size_t p = 0; p < pixels; ++p)
+            OIIO::convert_pixel_values(frame.spec.channelformat(channels[k]),
+                                       native + p * frame.native_pixel_bytes + frame.byte_offset[channels[k]],
+                                       OIIO::TypeFloat, destination + p * channels.size() + k);
+}
+
+void SequenceReader::channels_to_native(int frame_index, unsigned char* native, std::size_t pixels,
+                                        const std::vector<int>& channels, const float* source) const
+{
+    const detail::OpenFrame& frame = *m_frames.at(frame_index);
+    for (std::size_t k = 0; k < channels.size(); ++k)
+        for (std::size_t p = 0; p < pixels; ++p)
+            OIIO::convert_pixel_values(
+                OIIO::TypeFloat, source + p * channels.size() + k, frame.spec.channelformat(channels[k]),
+                native + p * frame.native_pixel_bytes + frame.byte_offset[channels[k]]);
+}
+
 }  // namespace modestack::io

@@ -77,6 +77,17 @@ public:
     /// the tile height of a tiled file): what an open file buffers at a time.
     int chunk_rows(int frame_index) const;
 
+    /// Every channel name of frame `frame_index`, in native row order.
+    const std::vector<std::string>& channel_names(int frame_index) const;
+    /// Converts channels `channels` (indices into channel_names) of `pixels`
+    /// pixels of native rows to float, interleaved in that order.
+    void channels_from_native(int frame_index, const unsigned char* native, std::size_t pixels,
+                              const std::vector<int>& channels, float* destination) const;
+    /// Stores float values, interleaved like channels_from_native's, into
+    /// channels `channels` of native rows, each in its native type.
+    void channels_to_native(int frame_index, unsigned char* native, std::size_t pixels,
+                            const std::vector<int>& channels, const float* source) const;
+
     /// The opened frame, for io/'s writer.
     const detail::OpenFrame& frame(int frame_index) const { return *m_frames[frame_index]; }
 
