@@ -131,20 +131,19 @@ int run_run(const RunOptions& options)
     // beauty's shadows noisy; the per-pixel estimator choice keeps it no worse
     // than its input where its shadows move. The indirect stage then reads that
     // sequence (its DiffInd is the noisy one, bit for bit).
-    DenoiseCommandOptions direct_options;
-    direct_options.input = noisy;
-    direct_options.frames = frame_range;
-    direct_options.layers = {"DiffDir"};
-    direct_options.output = direct;
-    direct_options.ocio_config = color_config.path();
-    const DenoiseResult direct_result = denoise(make_denoise_job(direct_options, nullptr), options.common);
+    auto layer_stage = [&](const std::string& input, const std::string& layer, const std::string& output) {
+        DenoiseCommandOptions stage;
+        stage.input = input;
+        stage.frames = frame_range;
+        stage.layers = {layer};
+        stage.output = output;
+        stage.ocio_config = color_config.path();
+        return stage;
+    };
+    const DenoiseResult direct_result =
+        denoise(make_denoise_job(layer_stage(noisy, "DiffDir", direct), nullptr), options.common);
     write_json(json_file("denoise_direct.json"), denoise_json(direct_result));
-    DenoiseCommandOptions denoise_options;
-    denoise_options.input = direct;
-    denoise_options.frames = frame_range;
-    denoise_options.layers = {"DiffInd"};
-    denoise_options.output = denoised;
-    denoise_options.ocio_config = color_config.path();
+    DenoiseCommandOptions denoise_options = layer_stage(direct, "DiffInd", denoised);
     denoise_options.report_path = report_path;
     // The stage writes its page already; run completes it below (with refine and the reference).
     DenoiseResult denoise_result = denoise(make_denoise_job(denoise_options, nullptr), options.common);
