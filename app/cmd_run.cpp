@@ -138,6 +138,7 @@ int run_run(const RunOptions& options)
         stage.layers = {layer};
         stage.output = output;
         stage.ocio_config = color_config.path();
+        stage.no_update_beauty = true; // run composites the final beauty from the passes itself
         return stage;
     };
     const DenoiseResult direct_result =
