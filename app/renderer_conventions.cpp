@@ -75,9 +75,12 @@ void check_object(const nlohmann::json& value, const std::string& where,
 {
     if (!value.is_object())
         throw FieldError{where, "must be an object"};
-    for (const auto& [key, ignored] : value.items())
+    for (auto item = value.begin(); item != value.end();
+         ++item) { // not a structured binding: clang 14 cannot capture one
+        const std::string& key = item.key();
         if (std::none_of(known.begin(), known.end(), [&](const char* name) { return key == name; }))
             throw FieldError{where, fmt::format("has an unknown field \"{}\"", key)};
+    }
 }
 
 void read_detection(const nlohmann::json& renderer, const std::string& where, RendererConvention& convention)
