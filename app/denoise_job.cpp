@@ -254,10 +254,7 @@ DenoiseJob make_denoise_job(const DenoiseCommandOptions& options, const CLI::App
         check_object_space_options(options);
     DenoiseJob job;
     job.settings = make_settings(options);
-    job.transform = apply_method_options(options.method_options, job.settings);
-    if (!options.object_space
-             .empty()) // the points have no image neighbours to blur (auto; a list is refused above)
-        job.settings.estimators = {};
+    job.transform = apply_method_options(options.method_options, !options.object_space.empty(), job.settings);
     job.input = options.input;
     job.output = options.output;
     job.layers = options.layers;

@@ -104,7 +104,8 @@ denoise::Report run_segmented(SegmentRun& run, denoise::FrameSource& source, den
     return denoise::merge_reports(run.reports);
 }
 
-denoise::Transform apply_method_options(const MethodOptions& options, denoise::Settings& settings)
+denoise::Transform apply_method_options(const MethodOptions& options, bool object_space,
+                                        denoise::Settings& settings)
 {
     denoise::Transform transform = denoise::parse_transform(options.transform);
     if (!options.non_negative_mode.empty() && !options.non_negative)
@@ -136,10 +137,12 @@ denoise::Transform apply_method_options(const MethodOptions& options, denoise::S
         throw usage_error(
             "--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
     // auto: the choice wherever it can run (it measured better than the rebuild
-    // alone on every shot of bench/results/estimators.md).
+    // alone on every shot of bench/results/estimators.md); not on a rank map (a
+    // map of the rebuild) nor on points (no image neighbours to blur).
     settings.estimators = options.estimators != "auto" ? denoise::parse_estimators(options.estimators)
-                          : settings.rank_map.enabled  ? denoise::EstimatorOptions{}
-                                                       : denoise::parse_estimators("rebuild,input,spatial");
+                          : settings.rank_map.enabled || object_space
+                              ? denoise::EstimatorOptions{}
+                              : denoise::parse_estimators("rebuild,input,spatial");
     if (settings.estimators.enabled() && settings.rank_map.enabled)
         throw usage_error(
             "--estimators cannot be combined with --rank-map yet: the map is of the rebuild alone");

@@ -39,9 +39,11 @@ struct MethodOptions {
 void add_method_options(CLI::App& command, MethodOptions& options);
 
 /// Checks the values and combinations (throws usage errors naming the option) and
-/// fills `settings` (after the other options set it, mode filter included).
-/// Returns the parsed transform, its log offset not yet known.
-denoise::Transform apply_method_options(const MethodOptions& options, denoise::Settings& settings);
+/// fills `settings` (after the other options set it, mode filter included);
+/// `object_space`: the points job denoises (no image neighbours for the
+/// estimator choice). Returns the parsed transform, its log offset not yet known.
+denoise::Transform apply_method_options(const MethodOptions& options, bool object_space,
+                                        denoise::Settings& settings);
 
 /// The parts of --segments: a list checked against the shot's frame numbers
 /// before any work (usage errors), or found from the data when `auto`.
