@@ -42,8 +42,10 @@ std::vector<std::string> components_of(const io::SelectedLayer& layer)
     return components;
 }
 
-// "ViewLayer.DiffCol * ViewLayer.DiffDir + ... + ViewLayer.Emit": the beauty's sum as the table gives it.
-std::string composition(const RendererConvention& convention, const std::string& prefix)
+// "ViewLayer.DiffCol * ViewLayer.DiffDir + ... + ViewLayer.Emit": the beauty's sum as the table gives it,
+// `beauty` its layer as the file names it.
+std::string composition(const RendererConvention& convention, const std::string& prefix,
+                        const std::string& beauty)
 {
     std::vector<std::string> terms;
     for (const std::string& term : convention.beauty_sum) {
@@ -52,7 +54,7 @@ std::string composition(const RendererConvention& convention, const std::string&
                             ? prefix + term
                             : fmt::format("{}{} * {}{}", prefix, light->colour, prefix, term));
     }
-    return fmt::format("{} = {}", shown(full_name(prefix, convention.beauty_layer)), fmt::join(terms, " + "));
+    return fmt::format("{} = {}", shown(full_name(prefix, beauty)), fmt::join(terms, " + "));
 }
 
 // Fills `plan`'s targets, or returns why the beauty's composition over the denoised layers is not known.
@@ -81,7 +83,15 @@ std::string compose(const RendererChoice& renderer, const io::SequenceReader& re
                convention.beauty_sum.end();
     };
     const std::vector<std::string> components = components_of(layers.front());
-    BeautyTarget beauty{full_name(prefix, convention.beauty_layer), components, {}};
+    // The beauty's name in this file: the table's, else the first of its aliases the file has.
+    std::string beauty_layer = convention.beauty_layer;
+    if (!has_layer(full_name(prefix, beauty_layer), components))
+        for (const std::string& alias : convention.beauty_aliases)
+            if (has_layer(full_name(prefix, alias), components)) {
+                beauty_layer = alias;
+                break;
+            }
+    BeautyTarget beauty{full_name(prefix, beauty_layer), components, {}};
     std::vector<BeautyTarget> products;
     std::map<std::string, std::string> holder; // a term of the sum -> the denoised layer that holds it
     int offset = 0;
@@ -95,7 +105,7 @@ std::string compose(const RendererChoice& renderer, const io::SequenceReader& re
             return fmt::format("the denoised layers {} and {} have different components", layers.front().name,
                                layer.name);
         const std::string short_name = layer.name.substr(prefix.size());
-        if (short_name == convention.beauty_layer)
+        if (short_name == beauty_layer)
             return fmt::format("the beauty {} is itself denoised", shown(layer.name));
         const LightLayer* light = convention.light_layer(short_name);
         if (!light)
@@ -115,7 +125,7 @@ std::string compose(const RendererChoice& renderer, const io::SequenceReader& re
             return fmt::format(
                 "{} is a light layer of the {} conventions but not a term of their beauty's sum "
                 "({})",
-                layer.name, convention.name, composition(convention, prefix));
+                layer.name, convention.name, composition(convention, prefix, beauty_layer));
         for (const std::string& term : terms) {
             auto [held, added] = holder.emplace(term, layer.name);
             if (!added)
@@ -124,9 +134,12 @@ std::string compose(const RendererChoice& renderer, const io::SequenceReader& re
                     "them in separate runs)",
                     held->second, layer.name, prefix, term);
         }
-        BeautyTerm term{layer.name, light->colour.empty() ? "" : prefix + light->colour, {}};
+        BeautyTerm term{layer.name, light->colour.empty() ? "" : prefix + light->colour, {}, {}};
         for (size_t c = 0; c < components.size(); ++c)
             term.selected_offsets.push_back(first + static_cast<int>(c));
+        if (std::all_of(layer.sigma_names.begin(), layer.sigma_names.end(),
+                        [&](const std::string& name) { return present.count(name) > 0; }))
+            term.input_sigma = layer.sigma_names; // denoised before: its term of an input beauty sigma
         if (!term.colour.empty() && !has_layer(term.colour, components))
             return fmt::format("{} has no colour layer {} (the {} conventions multiply {} by it)", file,
                                term.colour, convention.name, layer.name);
@@ -138,18 +151,24 @@ std::string compose(const RendererChoice& renderer, const io::SequenceReader& re
     if (!has_layer(beauty.layer, components))
         return fmt::format("{} has no beauty {} with the channels {} (the {} conventions' beauty)", file,
                            shown(beauty.layer), fmt::join(components, ", "), convention.name);
+    // The beauty's sigma: appended, or (an earlier run's output) rewritten in its own channels.
     std::vector<std::string> sigma_names;
+    size_t in_input = 0;
     for (const std::string& component : components) {
         sigma_names.push_back(
             channel_of(beauty.layer.empty() ? "sigma" : beauty.layer + ".sigma", component));
-        if (present.count(sigma_names.back()))
-            return fmt::format("{} has a channel {} already (an output of an earlier run?)", file,
-                               sigma_names.back());
+        in_input += present.count(sigma_names.back());
     }
-    plan.composition = composition(convention, prefix);
+    if (in_input != 0 && in_input != sigma_names.size())
+        return fmt::format("{} has some of the beauty's sigma channels {} but not all", file,
+                           fmt::join(sigma_names, ", "));
+    if (in_input == 0)
+        for (BeautyTerm& term : beauty.terms)
+            term.input_sigma.clear(); // no input beauty sigma to take its term out of
+    plan.composition = composition(convention, prefix, beauty_layer);
     plan.targets.push_back(std::move(beauty));
     plan.targets.insert(plan.targets.end(), products.begin(), products.end());
-    plan.sigma_names = std::move(sigma_names);
+    (in_input ? plan.sigma_in_place : plan.sigma_names) = std::move(sigma_names);
     return {};
 }
 
@@ -190,6 +209,20 @@ std::string beauty_formula(const BeautyTarget& target)
     return fmt::format("{} += {}", shown(target.layer), fmt::join(terms, " + "));
 }
 
+std::vector<std::string> rewritten_layers(const BeautyPlan& plan)
+{
+    std::vector<std::string> layers;
+    if (plan.update)
+        for (const BeautyTarget& target : plan.targets)
+            layers.push_back(target.layer);
+    if (plan.update && !plan.sigma_in_place.empty()) { // the input's beauty sigma, rewritten
+        std::string layer, component;
+        io::split_channel_name(plan.sigma_in_place.front(), layer, component);
+        layers.push_back(layer);
+    }
+    return layers;
+}
+
 nlohmann::ordered_json beauty_json(const BeautyPlan& plan)
 {
     nlohmann::ordered_json json;
@@ -207,13 +240,25 @@ nlohmann::ordered_json beauty_json(const BeautyPlan& plan)
         return channels;
     }();
     json["formula"] = beauty_formula(beauty);
-    std::vector<std::string> variances;
+    const bool in_place = !plan.sigma_in_place.empty();
+    auto variance = [](const BeautyTerm& term, const std::string& sigma) {
+        return term.colour.empty() ? fmt::format("{}^2", sigma)
+                                   : fmt::format("{}^2 * {}^2", term.colour, sigma);
+    };
+    std::string variances;
+    if (in_place) {
+        std::string layer, component;
+        io::split_channel_name(plan.sigma_in_place.front(), layer, component);
+        variances = fmt::format("{} (input)^2", layer);
+        for (const BeautyTerm& term : beauty.terms)
+            if (!term.input_sigma.empty())
+                variances += " - " + variance(term, term.denoised + ".sigma (input)");
+    }
     for (const BeautyTerm& term : beauty.terms)
-        variances.push_back(term.colour.empty()
-                                ? fmt::format("{}.sigma^2", term.denoised)
-                                : fmt::format("{}^2 * {}.sigma^2", term.colour, term.denoised));
-    json["sigma"] = {{"channels", plan.sigma_names},
-                     {"formula", fmt::format("sqrt({})", fmt::join(variances, " + "))},
+        variances += (variances.empty() ? "" : " + ") + variance(term, term.denoised + ".sigma");
+    json["sigma"] = {{"channels", in_place ? plan.sigma_in_place : plan.sigma_names},
+                     {"rewritten", in_place},
+                     {"formula", fmt::format("sqrt({})", variances)},
                      {"meaning",
                       "the standard error the denoised layers leave in the beauty; its other terms "
                       "keep their render noise, which is not counted"}};
@@ -250,6 +295,13 @@ BeautyUpdate::BeautyUpdate(const io::SequenceReader& reader, BeautyPlan plan)
                         channels.colour.back().back().push_back(index(channel_of(term.colour, component)));
             }
         }
+        for (const std::string& channel : m_plan.sigma_in_place)
+            channels.sigma_in_place.push_back(index(channel));
+        for (const BeautyTerm& term : m_plan.targets.front().terms) {
+            channels.input_sigma.emplace_back();
+            for (const std::string& channel : term.input_sigma)
+                channels.input_sigma.back().push_back(index(channel));
+        }
         m_frames.push_back(std::move(channels));
     }
 }
@@ -259,10 +311,23 @@ void BeautyUpdate::apply(int frame_index, std::size_t pixels, unsigned char* nat
 {
     const FrameChannels& channels = m_frames.at(static_cast<size_t>(frame_index));
     const std::size_t selected = static_cast<std::size_t>(m_reader.selected_channel_count());
-    thread_local std::vector<float> noisy, values;
-    thread_local std::vector<std::vector<float>> colours;
+    thread_local std::vector<float> noisy, values, sigma_in;
+    thread_local std::vector<std::vector<float>> colours, term_sigma_in;
     noisy.resize(pixels * selected);
     m_reader.selected_from_native(frame_index, native, pixels, noisy.data());
+    // The input beauty's sigma and the input sigma of its terms denoised before, before any rewrite.
+    const bool in_place = !channels.sigma_in_place.empty();
+    if (in_place) {
+        sigma_in.resize(pixels * channels.sigma_in_place.size());
+        m_reader.channels_from_native(frame_index, native, pixels, channels.sigma_in_place, sigma_in.data());
+        term_sigma_in.resize(channels.input_sigma.size());
+        for (size_t k = 0; k < channels.input_sigma.size(); ++k)
+            if (!channels.input_sigma[k].empty()) {
+                term_sigma_in[k].resize(pixels * channels.input_sigma[k].size());
+                m_reader.channels_from_native(frame_index, native, pixels, channels.input_sigma[k],
+                                              term_sigma_in[k].data());
+            }
+    }
     for (size_t t = 0; t < m_plan.targets.size(); ++t) {
         const BeautyTarget& target = m_plan.targets[t];
         const std::size_t components = target.components.size();
@@ -277,7 +342,7 @@ void BeautyUpdate::apply(int frame_index, std::size_t pixels, unsigned char* nat
         }
         for (std::size_t p = 0; p < pixels; ++p)
             for (std::size_t c = 0; c < components; ++c) {
-                double change = 0, variance = 0;
+                double change = 0, variance = 0, replaced = 0;
                 for (size_t k = 0; k < target.terms.size(); ++k) {
                     const std::size_t at =
                         p * selected + static_cast<std::size_t>(target.terms[k].selected_offsets[c]);
@@ -290,15 +355,32 @@ void BeautyUpdate::apply(int frame_index, std::size_t pixels, unsigned char* nat
                         change += difference;
                     if (sigma)
                         variance += colour * colour * static_cast<double>(sigma[at]) * sigma[at];
+                    if (t == 0 && in_place && !channels.input_sigma[k].empty()) {
+                        const double before = term_sigma_in[k][p * components + c];
+                        replaced += colour * colour * before * before;
+                    }
                 }
                 float& value = values[p * components + c];
                 value = static_cast<float>(value + change);
-                if (t == 0)
-                    beauty_sigma[p * components + c] =
-                        std::isfinite(variance) ? static_cast<float>(std::sqrt(variance)) : 0.0f;
+                if (t != 0)
+                    continue;
+                if (!std::isfinite(variance))
+                    variance = 0;
+                if (in_place) {
+                    // The input's sigma keeps the other layers' terms (independent errors: in quadrature).
+                    float& combined = sigma_in[p * components + c];
+                    const double kept = static_cast<double>(combined) * combined - replaced;
+                    const double total = std::max(0.0, std::isfinite(kept) ? kept : 0.0) + variance;
+                    if (std::isfinite(static_cast<double>(combined)))
+                        combined = static_cast<float>(std::sqrt(total));
+                } else {
+                    beauty_sigma[p * components + c] = static_cast<float>(std::sqrt(variance));
+                }
             }
         m_reader.channels_to_native(frame_index, native, pixels, channels.target[t], values.data());
     }
+    if (in_place)
+        m_reader.channels_to_native(frame_index, native, pixels, channels.sigma_in_place, sigma_in.data());
 }
 
 } // namespace modestack::app

@@ -5,7 +5,9 @@
 // composition over the denoised layers is known, and why not; BeautyUpdate then
 // rewrites, in the native rows the sink copies, the beauty (and the product AOV
 // of a raw layer) as  target + Σ_k colour_k × (denoised_k − noisy_k)  and gives
-// the beauty's sigma  sqrt(Σ_k colour_k² σ_k²).
+// the beauty's sigma  sqrt(Σ_k colour_k² σ_k²), or, when the input's beauty has a
+// sigma already (the output of an earlier run), that sigma combined with the new
+// terms in quadrature, in its own channels.
 #pragma once
 
 #include "app/renderer_detection.h"
@@ -24,6 +26,9 @@ struct BeautyTerm {
     std::string denoised;              ///< the denoised layer, full name
     std::string colour;                ///< its colour AOV, full name ("" = × 1)
     std::vector<int> selected_offsets; ///< of each component in a selected row
+    /// The layer's sigma channels in the input (denoised before), by component: its
+    /// term in the input beauty's sigma, replaced by the new one. Empty: none.
+    std::vector<std::string> input_sigma;
 };
 
 /// A pass-through layer rewritten: the beauty, or a raw layer's product AOV.
@@ -40,7 +45,14 @@ struct BeautyPlan {
     std::string reason;                   ///< why the beauty is (not) updated
     std::string composition;              ///< the beauty's sum as the conventions give it
     std::vector<BeautyTarget> targets;    ///< [0] the beauty, then product AOVs
-    std::vector<std::string> sigma_names; ///< the beauty's sigma channels
+    /// The beauty's sigma channels appended to the output; empty when the input has
+    /// them (`sigma_in_place`).
+    std::vector<std::string> sigma_names;
+    /// The beauty's sigma channels of the input (an earlier run's), rewritten in
+    /// place as sqrt(σ_in² − Σ_k colour_k² σ_k,in² + Σ_k colour_k² σ_k²): the errors
+    /// of the beauty's layers are independent, and a layer denoised again replaces
+    /// its own term (σ_k,in, `BeautyTerm::input_sigma`, 0 for a layer not denoised before).
+    std::vector<std::string> sigma_in_place;
 };
 
 /// The plan for the denoised layers of `reader` under `renderer`'s conventions:
@@ -58,6 +70,10 @@ BeautyPlan plan_beauty_update(const RendererChoice& renderer, const io::Sequence
 /// ViewLayer.DiffInd)".
 std::string beauty_formula(const BeautyTarget& target);
 
+/// The layers a plan rewrites (its targets), by full name: what --only-denoised
+/// keeps of the pass-through layers.
+std::vector<std::string> rewritten_layers(const BeautyPlan& plan);
+
 /// The --json block "beauty".
 nlohmann::ordered_json beauty_json(const BeautyPlan& plan);
 
@@ -70,7 +86,8 @@ public:
     /// Rewrites the targets in `native` (`pixels` pixels of frame `frame_index`,
     /// read_native's layout, still holding the noisy denoised layers) from
     /// `rebuilt` and writes the beauty's sigma, one value per component, to
-    /// `beauty_sigma` (`sigma` null: zero).
+    /// `beauty_sigma` (`sigma` null: zero), or with `sigma_in_place` into
+    /// `native` (`beauty_sigma` unused).
     void apply(int frame_index, std::size_t pixels, unsigned char* native, const float* rebuilt,
                const float* sigma, float* beauty_sigma) const;
 
@@ -78,6 +95,8 @@ private:
     struct FrameChannels {
         std::vector<std::vector<int>> target;              ///< by target, by component
         std::vector<std::vector<std::vector<int>>> colour; ///< by target, by term ({} = × 1)
+        std::vector<int> sigma_in_place;                   ///< by component ({} = appended)
+        std::vector<std::vector<int>> input_sigma;         ///< of the beauty's terms, by component
     };
     const io::SequenceReader& m_reader;
     BeautyPlan m_plan;

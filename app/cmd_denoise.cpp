@@ -51,6 +51,9 @@ Subcommand add_denoise_command(CLI::App& parent)
                         "Layer to denoise: NAME.R/G/B or <prefix>.NAME.<ch> (Cycles DiffInd); repeatable. "
                         "Default: the only RGB layer")
         ->allow_extra_args(false);  // one value per --layer, so that `--layer DiffInd in.####.exr` works
+    command->add_flag("--joint", options->joint,
+                      "With several --layer: denoise them on one shared set of modes and one N (layers lit "
+                      "alike); default: each layer on its own modes and N, in one pass over the files");
     command->add_option("--rank", options->rank, "Number of modes N, or auto to let --rank-rule choose");
     command->add_option("--rank-rule", options->rank_rule,
                         "How auto chooses N with --no-mode-filter: press (cross-validation), variance (the seed's "
@@ -118,6 +121,22 @@ Subcommand add_denoise_command(CLI::App& parent)
         "--single-part", options->single_part,
         "Write a multi-part input's outputs as single-part files, every channel named by its layer "
         "(default: the input's parts, names and headers, each sigma in its layer's part)");
+    command
+        ->add_option("--compression", options->compression,
+                     "Compression of the outputs: none, rle, zips, zip, piz, pxr24, b44, b44a, dwaa, dwab "
+                     "(dwaa:45: with a level). Default: the input's (per part) if lossless (none, rle, zips, "
+                     "zip, piz), else zip, so that no channel passed through is degraded; a lossy one given "
+                     "here applies to every channel")
+        ->option_text("NAME");
+    command
+        ->add_option("--data-type", options->data_type,
+                     "Pixel type of the denoised channels and their sigma: half or float (default: the "
+                     "input's); the other channels keep theirs")
+        ->option_text("half|float");
+    command->add_flag("--only-denoised", options->only_denoised,
+                      "Write only the denoised layers and their sigma (and the beauty and its sigma when "
+                      "--update-beauty rewrites it), no other channel; a multi-part input keeps only the "
+                      "parts that still hold channels");
     command->add_flag(
         "--update-beauty", options->update_beauty,
         "Keep the beauty in step with the denoised layers: beauty + sum of colour x (denoised - "
@@ -153,6 +172,10 @@ Subcommand add_denoise_command(CLI::App& parent)
                 if (!given.options.stage.stage.empty())
                     throw usage_error("--stage is for farm tasks, one process each: under mpirun the ranks run "
                                       "every stage themselves");
+                if (given.options.layers.size() > 1 && !given.options.joint)
+                    throw usage_error(
+                        "under mpirun the ranks run the farm stages, which hold one set of modes: "
+                        "with several --layer add --joint, or run one layer per job");
                 // mpirun -n K: each rank runs the farm stages on its share (mpi_job.h).
                 return run_mpi_denoise(given.options.frames, [&](const StageOptions& stage,
                                                                  const std::string& frames, bool lead) {

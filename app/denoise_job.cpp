@@ -207,6 +207,25 @@ void check_object_space_options(const DenoiseCommandOptions& options)
         refuse("--estimators", "the choice blurs image neighbours, which points do not have");
 }
 
+// What needs one set of modes for the whole shot, so several layers each on
+// their own modes cannot have it: --joint gives them one.
+void check_layers_apart(const DenoiseCommandOptions& options)
+{
+    const auto refuse_option = [&](const char* option, const char* why) {
+        throw usage_error(fmt::format("{} with {} layers each on its own modes: {}; add --joint to share one "
+                                      "set of modes, or run one layer per job",
+                                      option, options.layers.size(), why));
+    };
+    if (!options.stage.stage.empty())
+        refuse_option("--stage", "the farm's stage files hold one set of modes");
+    if (!options.save_modes.empty())
+        refuse_option("--save-modes", "it writes one set of modes");
+    if (!options.rank_map.empty())
+        refuse_option("--rank-map", "it writes one map of N");
+    if (!options.object_space.empty())
+        refuse_option("--object-space", "the points job shares its modes between layers");
+}
+
 DenoiseResult denoise_object_space(const DenoiseJob& job, const denoise::Settings& settings,
                                    const io::FrameSequence& input, const std::vector<std::string>& paths,
                                    int frames_written, std::chrono::steady_clock::time_point start,
@@ -217,6 +236,7 @@ DenoiseResult denoise_object_space(const DenoiseJob& job, const denoise::Setting
     points_job.points = job.object_space;
     points_job.exr_codec = job.exr_codec;
     points_job.part_layout = job.part_layout;
+    points_job.output_format = job.output_format;
     points_job.layers = job.layers;
     points_job.conventions = job.conventions;
     points_job.renderer = job.renderer;
@@ -239,6 +259,25 @@ DenoiseResult denoise_object_space(const DenoiseJob& job, const denoise::Setting
     result.points_input = job.object_space;
     result.surface_filter = job.surface_filter;
     return result;
+}
+
+// --compression, --data-type, --only-denoised checked (output_format.h has the compression rule).
+io::OutputFormat make_output_format(const DenoiseCommandOptions& options)
+{
+    io::OutputFormat format;
+    if (!options.compression.empty() && !io::is_compression_name(options.compression))
+        throw usage_error(
+            fmt::format("--compression '{}' is not one of {} (dwaa and dwab may take a level: dwaa:45)",
+                        options.compression, io::compression_names()));
+    format.compression = options.compression;
+    if (options.data_type == "half")
+        format.written_type = io::WrittenType::Half;
+    else if (options.data_type == "float")
+        format.written_type = io::WrittenType::Float;
+    else if (!options.data_type.empty())
+        throw usage_error(fmt::format("--data-type '{}' is not one of half, float", options.data_type));
+    format.only_written = options.only_denoised;
+    return format;
 }
 
 }  // namespace
@@ -277,6 +316,10 @@ DenoiseJob make_denoise_job(const DenoiseCommandOptions& options, const CLI::App
     job.update_beauty = options.update_beauty ? "on" : options.no_update_beauty ? "off" : "auto";
     job.exr_codec = options.exr_codec;
     job.part_layout = options.single_part ? io::PartLayout::SinglePart : io::PartLayout::AsInput;
+    job.joint = options.joint || options.layers.size() < 2;
+    if (!job.joint)
+        check_layers_apart(options);
+    job.output_format = make_output_format(options);
     job.surface_filter = !options.no_mode_filter;
     job.filter_widths = options.mode_filter_widths;
     job.method_options = options.method_options;
@@ -342,6 +385,9 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
         return denoise_object_space(job, settings, input, paths, frames_written, start, context);
     }
     io::SequenceReader reader(input, job.layers, job.exr_codec);
+    if (!job.joint)
+        for (const io::SelectedLayer& layer : reader.layers())
+            settings.layer_channels.push_back(static_cast<int>(layer.channel_names.size()));
     DenoiseColor color = choose_denoise_color(job.ocio_config, job.colorspace, reader);
 
     if (staged)
@@ -379,6 +425,7 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
     SequenceSink sink(reader, paths, job.save_modes);
     sink.write_rank_map_to(job.rank_map);
     sink.set_part_layout(job.part_layout);
+    sink.set_output_format(job.output_format);
     BeautyPlan beauty = plan_beauty_update(renderer, reader, job.update_beauty, color.converter == nullptr);
     std::vector<io::HeaderAttribute> attributes = provenance_attributes(input);
     if (beauty.update && writes_frames) {
@@ -447,6 +494,7 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
     result.channel_names = reader.selected_channel_names();
     for (const auto& layer : reader.layers())
         result.layers.push_back({layer.name, layer.channel_names, layer.sigma_names});
+    result.joint = settings.layer_channels.size() < 2;
     result.renderer = renderer_json(renderer, source.auxiliary_lookups());
     result.beauty = beauty_json(beauty);
     result.rank_map = job.rank_map;

@@ -60,6 +60,10 @@ struct DenoiseCommandOptions {
     std::string object_space;  ///< --object-space: the points sequence
     io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;  ///< --exr-codec
     bool single_part = false;                           ///< --single-part
+    bool joint = false;                                 ///< --joint: several layers share their modes
+    std::string compression;    ///< --compression ("" = the input's if lossless, else zip)
+    std::string data_type;      ///< --data-type half|float ("" = the input's)
+    bool only_denoised = false; ///< --only-denoised
     MethodOptions method_options;
     StageOptions stage;
 };
@@ -85,6 +89,10 @@ struct DenoiseJob {
     std::string update_beauty = "auto"; ///< auto, on (--update-beauty), off (--no-update-beauty)
     io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;
     io::PartLayout part_layout = io::PartLayout::AsInput; ///< --single-part flattens multi-part inputs
+    /// Several layers share one set of modes and N (--joint, or one layer);
+    /// otherwise each layer gets its own (denoise::Settings::layer_channels).
+    bool joint = true;
+    io::OutputFormat output_format;                       ///< --compression, --data-type, --only-denoised
     bool surface_filter = true;       ///< object space: filter over the surfaces
     std::vector<double> filter_widths;
     denoise::Settings settings;
@@ -113,6 +121,7 @@ struct DenoiseResult {
     int width = 0, height = 0;   ///< of the frames
     std::vector<std::string> channel_names;
     std::vector<DenoisedLayer> layers;
+    bool joint = true; ///< the layers shared their modes (false: each has its own, report.layers)
     /// The renderer conventions used and the guide and variance layers found (renderer_json).
     nlohmann::ordered_json renderer;
     /// What --update-beauty did to the beauty, and why (beauty_json).

@@ -73,10 +73,12 @@ std::pair<int, int> parse_rows(const std::string& text, int height, int unit_row
 // how verbosely (none of which change a bit of the result).
 nlohmann::ordered_json method_options_given(const CLI::App& command)
 {
-    static const std::set<std::string> excluded{"SEQ",      "--output",  "--stage",        "--rows",
-                                                "--stats",  "--solve",   "--survey", "--modes", "--frames", "--json",
-                                                "--threads", "--quiet",  "--max-memory",   "--skip-existing",
-                                                "--report", "--save-modes", "--help"};
+    static const std::set<std::string> excluded{"SEQ", "--output", "--stage", "--rows", "--stats", "--solve",
+                                                "--survey", "--modes", "--frames", "--json", "--threads",
+                                                "--quiet", "--max-memory", "--skip-existing", "--report",
+                                                "--save-modes", "--help",
+                                                // how frames are written, not what is computed
+                                                "--compression", "--data-type", "--only-denoised"};
     nlohmann::ordered_json options = nlohmann::ordered_json::object();
     for (const CLI::Option* option : command.get_options())
         if (option->count() > 0 && !excluded.count(option->get_name()))

@@ -7,6 +7,8 @@
 #include "app/command.h"
 #include "io/sequence.h"
 
+#include <fmt/format.h>
+
 #include <cstdio>
 
 namespace modestack::app {
@@ -119,9 +121,20 @@ nlohmann::ordered_json denoise_json(const DenoiseResult& result)
     nlohmann::ordered_json json = run_json(result);
     json["channels"] = result.channel_names;
     nlohmann::ordered_json layers = nlohmann::ordered_json::array();
-    for (const DenoisedLayer& layer : result.layers)
-        layers.push_back({{"layer", layer.name}, {"channels", layer.channels}, {"sigma", layer.sigma}});
+    for (size_t i = 0; i < result.layers.size(); ++i) {
+        const DenoisedLayer& layer = result.layers[i];
+        nlohmann::ordered_json entry{
+            {"layer", layer.name}, {"channels", layer.channels}, {"sigma", layer.sigma}};
+        if (!result.joint && i < report.layers.size()) { // the layer's own modes
+            add_modes_json(report.layers[i], entry);
+            entry["mode_filter"] = mode_filter_json(report.layers[i]);
+        }
+        layers.push_back(entry);
+    }
     json["layers"] = layers;
+    // Several layers: one set of modes for all (the top-level rank), or each its own (under "layers", the
+    // top level then repeats the first layer's).
+    json["joint"] = result.joint;
     if (!result.renderer.is_null())
         json["renderer"] = result.renderer;
     if (!result.beauty.is_null())
@@ -169,6 +182,16 @@ void print_denoise_summary(const DenoiseResult& result)
             std::fprintf(stderr, "--stage %s of %d frames written to %s in %.2f s\n",
                          denoise::stage_name(*result.stage), report.shape.frames, result.output.c_str(),
                          result.seconds);
+    } else if (!result.joint && report.layers.size() == result.layers.size()) {
+        std::string modes;
+        for (size_t i = 0; i < result.layers.size(); ++i)
+            modes += fmt::format("{}{} N = {}", i ? ", " : "", result.layers[i].name,
+                                 report.layers[i].rank_decision.kept_modes);
+        std::fprintf(
+            stderr,
+            "denoised %d of %d frames, each layer on its own modes (%s; %s rule, %s solver) in %.2f s\n",
+            result.frames_written, report.shape.frames, modes.c_str(), report.rank_decision.rule.c_str(),
+            report.solver.c_str(), result.seconds);
     } else {
         std::fprintf(stderr, "denoised %d of %d frames with N = %d modes (%s rule, %s solver) in %.2f s\n",
                      result.frames_written, report.shape.frames, report.rank_decision.kept_modes,

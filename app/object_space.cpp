@@ -133,12 +133,13 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
 
     SequenceSink sink(frame_reader, job.outputs, "");
     sink.set_part_layout(job.part_layout);
+    sink.set_output_format(job.output_format);
     std::vector<io::HeaderAttribute> attributes = job.attributes;
     attributes.push_back(io::HeaderAttribute::of_text("modestack:object_space", point_files.printf_pattern));
     attributes.push_back(io::HeaderAttribute::of_integer("modestack:points", result.points));
     sink.set_attributes(std::move(attributes));
     sink.begin(
-        {result.report.rank_decision.kept_modes, result.report.rank_decision.rule, result.report.solver});
+        {result.report.rank_decision.kept_modes, result.report.rank_decision.rule, result.report.solver, {}});
     const int frames = frame_reader.frame_count(), channels = frame_reader.selected_channel_count();
     const std::size_t pixels = static_cast<std::size_t>(frame_reader.width()) * frame_reader.height();
     progress.begin(fmt::format("rebuilding {} frames from {} points", frames, result.points), frames);

@@ -39,6 +39,7 @@ struct ObjectSpaceJob {
     std::shared_ptr<const ConventionTable> conventions;
     std::string renderer = "auto";
     io::PartLayout part_layout = io::PartLayout::AsInput; ///< --single-part
+    io::OutputFormat output_format;                       ///< --compression, --data-type, --only-denoised
 };
 
 /// What the job did, for the summary.

@@ -162,8 +162,9 @@ void read_beauty(const nlohmann::json& renderer, const std::string& where, Rende
     if (beauty == renderer.end())
         return;
     const std::string at = where + ".beauty";
-    check_object(*beauty, at, {"layer", "sum"});
+    check_object(*beauty, at, {"layer", "aliases", "sum"});
     convention.beauty_layer = text_field(*beauty, "layer", at, true);
+    convention.beauty_aliases = optional_list(*beauty, "aliases", at, false);
     convention.beauty_sum = optional_list(*beauty, "sum", at, false);
     for (const std::string& term : convention.beauty_sum)
         if (!convention.light_layer(term))

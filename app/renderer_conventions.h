@@ -50,6 +50,9 @@ struct RendererConvention {
     /// Names tried before `variance` for one layer name ("" is the unnamed R, G, B).
     std::map<std::string, std::vector<std::string>> variance_by_layer;
     std::string beauty_layer;            ///< "" = the unnamed R, G, B, A
+    /// Names the beauty has where `beauty_layer` is not in the file, tried in
+    /// order: a multi-part file's beauty is a named part ("RGBA"), never unnamed.
+    std::vector<std::string> beauty_aliases;
     std::vector<std::string> beauty_sum; ///< light layers whose colour × layer sum to the beauty
 
     /// The light layer named `layer`, or nullptr.

@@ -112,6 +112,13 @@ void SequenceSink::update_beauty(std::unique_ptr<BeautyUpdate> update)
     m_beauty = std::move(update);
     const std::vector<std::string>& names = m_beauty->plan().sigma_names;
     m_sigma_names.insert(m_sigma_names.end(), names.begin(), names.end());
+    m_format.kept_layers = rewritten_layers(m_beauty->plan());
+}
+
+void SequenceSink::set_output_format(io::OutputFormat format)
+{
+    format.kept_layers = m_format.kept_layers; // what update_beauty() said
+    m_format = std::move(format);
 }
 
 void SequenceSink::begin(const denoise::RebuildStart& start)
@@ -120,13 +127,19 @@ void SequenceSink::begin(const denoise::RebuildStart& start)
     attributes.push_back(io::HeaderAttribute::of_integer("modestack:rank", start.kept_modes));
     attributes.push_back(io::HeaderAttribute::of_text("modestack:rank_rule", start.rank_rule));
     attributes.push_back(io::HeaderAttribute::of_text("modestack:solver", start.solver));
+    if (start.layer_modes.size() == m_reader.layers().size()) { // each layer on its own modes
+        std::string ranks;
+        for (size_t i = 0; i < start.layer_modes.size(); ++i)
+            ranks += fmt::format("{}{}={}", i ? "," : "", m_reader.layers()[i].name, start.layer_modes[i]);
+        attributes.push_back(io::HeaderAttribute::of_text("modestack:layer_ranks", ranks));
+    }
     m_outputs.clear();
     for (size_t frame = 0; frame < m_paths.size(); ++frame)
         m_outputs.push_back(m_paths[frame].empty()
                                 ? nullptr
                                 : std::make_unique<io::FrameOutput>(
                                       m_paths[frame], m_reader, static_cast<int>(frame), m_sigma_names,
-                                      attributes, m_reader.exr_codec(), m_part_layout));
+                                      attributes, m_reader.exr_codec(), m_part_layout, m_format));
 }
 
 void SequenceSink::commit()

@@ -79,6 +79,9 @@ public:
     void set_attributes(std::vector<io::HeaderAttribute> attributes) { m_attributes = std::move(attributes); }
     /// --single-part: a multi-part input's outputs in one part (default: its parts).
     void set_part_layout(io::PartLayout layout) { m_part_layout = layout; }
+    /// --compression, --data-type, --only-denoised (the channels --update-beauty
+    /// rewrites are added to what --only-denoised keeps by update_beauty()).
+    void set_output_format(io::OutputFormat format);
     /// --rank-map: also writes the per-pixel rank to `path` (one channel "rank").
     void write_rank_map_to(std::string path) { m_rank_map_path = std::move(path); }
     /// --update-beauty: rewrites the beauty (and product AOVs) in the copied rows
@@ -105,6 +108,7 @@ private:
     std::vector<std::string> m_sigma_names;
     std::vector<io::HeaderAttribute> m_attributes;
     io::PartLayout m_part_layout = io::PartLayout::AsInput;
+    io::OutputFormat m_format;
     std::vector<std::unique_ptr<io::FrameOutput>> m_outputs;
     std::vector<std::unique_ptr<io::FrameOutput>> m_mode_outputs;
     std::string m_rank_map_path;

@@ -3,8 +3,10 @@
 #include "core/common/error.h"
 #include "io/detail/multipart_writer.h"
 #include "io/detail/open_frame.h"
+#include "io/detail/output_layout.h"
 #include "io/detail/zip_scanline_writer.h"
 #include "io/half_conversion.h"
+#include "io/layers.h"
 #include "io/sequence_reader.h"
 #include "io/temporary_file.h"
 
@@ -59,6 +61,101 @@ std::string claim_temporary_path(const std::string& path)
     return temporary_path_for(path);
 }
 
+OIIO::TypeDesc type_written(WrittenType written, OIIO::TypeDesc as_input)
+{
+    switch (written) {
+    case WrittenType::Half:
+        return OIIO::TypeDesc::HALF;
+    case WrittenType::Float:
+        return OIIO::TypeDesc::FLOAT;
+    case WrittenType::AsInput:
+        break;
+    }
+    return as_input;
+}
+
+// The channels of a copy of `source` (see output_layout.h) and each output part's compression.
+detail::OutputLayout layout_of(const detail::OpenFrame& source,
+                               const std::vector<std::string>& extra_channels, const OutputFormat& format,
+                               bool multipart_output)
+{
+    const OIIO::ImageSpec& spec = source.spec;
+    std::vector<bool> replaced(static_cast<size_t>(spec.nchannels), false);
+    for (int channel : source.selected)
+        replaced[static_cast<size_t>(channel)] = true;
+    const std::set<std::string> kept_layers(format.kept_layers.begin(), format.kept_layers.end());
+    // An input that is itself a denoise output has sigma channels already: the
+    // new ones replace them, never a second set under the same names.
+    const std::set<std::string> added(extra_channels.begin(), extra_channels.end());
+    detail::OutputLayout layout;
+    for (int c = 0; c < spec.nchannels; ++c) {
+        const std::string& name = spec.channelnames[c];
+        if (!replaced[c] && added.count(name))
+            continue;
+        std::string layer, component;
+        split_channel_name(name, layer, component);
+        // The unnamed layer is the bare R, G, B, A (a bare Z is a layer of its own, layers.h).
+        const bool in_kept_layer =
+            kept_layers.count(layer) &&
+            (!layer.empty() || component == "R" || component == "G" || component == "B" || component == "A");
+        if (format.only_written && !replaced[c] && !in_kept_layer)
+            continue;
+        // Untouched channels keep their type always; --data-type is for what is written anew.
+        const OIIO::TypeDesc type =
+            replaced[c] ? type_written(format.written_type, spec.channelformat(c)) : spec.channelformat(c);
+        layout.channels.push_back({name, type, layout.pixel_bytes, c});
+        layout.pixel_bytes += type.size();
+    }
+    const OIIO::TypeDesc extra_type =
+        type_written(format.written_type, spec.channelformat(source.selected.front()));
+    for (const std::string& name : extra_channels) {
+        layout.channels.push_back({name, extra_type, layout.pixel_bytes, -1});
+        layout.pixel_bytes += extra_type.size();
+    }
+    if (multipart_output)
+        for (const detail::OpenPart& part : source.parts)
+            layout.compressions.push_back(
+                output_compression(format.compression, part.spec.get_string_attribute("compression")));
+    else
+        layout.compressions.push_back(
+            output_compression(format.compression, spec.get_string_attribute("compression")));
+    return layout;
+}
+
+// The output channel that copies or replaces input channel `channel`, or -1.
+int output_index_of(const detail::OutputLayout& layout, int channel)
+{
+    for (size_t k = 0; k < layout.channels.size(); ++k)
+        if (layout.channels[k].input_channel == channel)
+            return static_cast<int>(k);
+    return -1;
+}
+
+// OpenImageIO's spec of a copy of `source` laid out as `layout` (one part).
+OIIO::ImageSpec spec_of(const detail::OpenFrame& source, const detail::OutputLayout& layout,
+                        const std::vector<HeaderAttribute>& attributes)
+{
+    OIIO::ImageSpec spec = source.spec;
+    spec.channelnames.clear();
+    spec.channelformats.clear();
+    for (const detail::OutputChannel& channel : layout.channels) {
+        spec.channelnames.push_back(channel.name);
+        spec.channelformats.push_back(channel.type);
+    }
+    spec.nchannels = static_cast<int>(spec.channelnames.size());
+    spec.alpha_channel =
+        source.spec.alpha_channel < 0 ? -1 : output_index_of(layout, source.spec.alpha_channel);
+    spec.z_channel = source.spec.z_channel < 0 ? -1 : output_index_of(layout, source.spec.z_channel);
+    spec.tile_width = spec.tile_height = spec.tile_depth = 0;
+    spec.erase_attribute("openexr:lineOrder");
+    // The input's DWA level is no part of the output's compression (a level asked for is in its name).
+    spec.erase_attribute("openexr:dwaCompressionLevel");
+    spec.erase_attribute("dwaCompressionLevel");
+    spec.attribute("compression", layout.compressions.front());
+    add_attributes(spec, attributes);
+    return spec;
+}
+
 }  // namespace
 
 HeaderAttribute HeaderAttribute::of_text(std::string name, std::string value)
@@ -91,62 +188,88 @@ struct ValuePlace {
     OIIO::TypeDesc type;
 };
 
+// Bytes copied unchanged from an input pixel into an output pixel.
+struct CopiedBytes {
+    size_t input_offset = 0, output_offset = 0, bytes = 0;
+};
+
 struct FrameOutput::State {
     std::unique_ptr<detail::ZipScanlineWriter> zip_writer;  ///< a ZIP/ZIPS copy, written with libdeflate
     std::unique_ptr<detail::MultiPartWriter> multipart_writer; ///< a multi-part copy in the input's parts
     std::unique_ptr<OIIO::ImageOutput> output;              ///< every other output
     OIIO::ImageSpec spec;
-    const detail::OpenFrame* source = nullptr;  ///< the copied input frame, if any
-    std::vector<OIIO::TypeDesc> extra_types;
+    const detail::OpenFrame* source = nullptr; ///< the copied input frame, if any
     size_t output_pixel_bytes = 0;
     std::vector<ValuePlace> replaced_places, extra_places;  ///< of each replaced / extra value of a pixel
+    /// The output pixel starts with the input pixel as it is (every channel kept, in its type):
+    /// copied whole. Otherwise `copied` lists the kept channels' bytes.
+    bool input_pixel_whole = false;
+    std::vector<CopiedBytes> copied;
+    bool copies_input = false;     ///< some kept channel is passed through (not replaced)
     bool all_places_half = false;  ///< every written value is a half: converted a row at a time
 };
 
 FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, int frame_index,
                          const std::vector<std::string>& extra_channels,
-                         const std::vector<HeaderAttribute>& attributes, ExrCodec codec, PartLayout parts)
+                         const std::vector<HeaderAttribute>& attributes, ExrCodec codec, PartLayout parts,
+                         const OutputFormat& format)
     : m_path(path), m_temporary_path(claim_temporary_path(path)), m_state(std::make_unique<State>())
 {
     const detail::OpenFrame& source = reader.frame(frame_index);
     m_state->source = &source;
-    OIIO::ImageSpec spec = source.spec;
-    if (spec.channelformats.empty())
-        spec.channelformats.assign(spec.nchannels, spec.format);
-    OIIO::TypeDesc extra_type = spec.channelformats[source.selected.front()];
-    for (const std::string& name : extra_channels) {
-        spec.channelnames.push_back(name);
-        spec.channelformats.push_back(extra_type);
-        m_state->extra_types.push_back(extra_type);
+    const bool multipart_output = source.multipart() && parts == PartLayout::AsInput;
+    const detail::OutputLayout layout = layout_of(source, extra_channels, format, multipart_output);
+    m_state->output_pixel_bytes = layout.pixel_bytes;
+    std::vector<int> output_of(static_cast<size_t>(source.spec.nchannels), -1); // by input channel
+    for (size_t k = 0; k < layout.channels.size(); ++k) {
+        const detail::OutputChannel& channel = layout.channels[k];
+        if (channel.input_channel < 0)
+            m_state->extra_places.push_back({channel.offset, channel.type});
+        else
+            output_of[static_cast<size_t>(channel.input_channel)] = static_cast<int>(k);
     }
-    spec.nchannels = static_cast<int>(spec.channelnames.size());
-    spec.alpha_channel = source.spec.alpha_channel;
-    spec.tile_width = spec.tile_height = spec.tile_depth = 0;
-    spec.erase_attribute("openexr:lineOrder");
-    add_attributes(spec, attributes);
-    m_state->output_pixel_bytes = source.native_pixel_bytes + extra_channels.size() * extra_type.size();
     for (int channel : source.selected)
-        m_state->replaced_places.push_back({source.byte_offset[channel], spec.channelformats[channel]});
-    size_t offset = source.native_pixel_bytes;
-    for (const OIIO::TypeDesc& type : m_state->extra_types) {
-        m_state->extra_places.push_back({offset, type});
-        offset += type.size();
+        m_state->replaced_places.push_back(
+            {layout.channels[output_of[channel]].offset, layout.channels[output_of[channel]].type});
+    m_state->input_pixel_whole = true;
+    std::vector<bool> replaced(output_of.size(), false);
+    for (int channel : source.selected)
+        replaced[static_cast<size_t>(channel)] = true;
+    for (int c = 0; c < source.spec.nchannels; ++c) {
+        const int k = output_of[static_cast<size_t>(c)];
+        if (k < 0 || layout.channels[k].offset != source.byte_offset[c] ||
+            layout.channels[k].type != source.spec.channelformat(c))
+            m_state->input_pixel_whole = false;
+        if (k < 0 || replaced[static_cast<size_t>(c)])
+            continue;
+        m_state->copies_input = true;
+        const size_t bytes = layout.channels[k].type.size();
+        std::vector<CopiedBytes>& copied = m_state->copied;
+        if (!copied.empty() && copied.back().input_offset + copied.back().bytes == source.byte_offset[c] &&
+            copied.back().output_offset + copied.back().bytes == layout.channels[k].offset)
+            copied.back().bytes += bytes; // one run of neighbouring channels, one copy
+        else
+            copied.push_back({source.byte_offset[c], layout.channels[k].offset, bytes});
     }
     m_state->all_places_half = true;
     for (const auto* places : {&m_state->replaced_places, &m_state->extra_places})
         for (const ValuePlace& place : *places)
             m_state->all_places_half = m_state->all_places_half && place.type == OIIO::TypeDesc::HALF;
-    m_state->spec = spec;
-    if (source.multipart() && parts == PartLayout::AsInput) {
-        m_state->multipart_writer = std::make_unique<detail::MultiPartWriter>(
-            m_temporary_path, m_path, source, extra_channels, extra_type, attributes);
+    m_state->spec = spec_of(source, layout, attributes);
+    if (multipart_output) {
+        m_state->multipart_writer =
+            std::make_unique<detail::MultiPartWriter>(m_temporary_path, m_path, source, layout, attributes);
         return;
     }
-    if (codec == ExrCodec::Libdeflate)
+    // libdeflate writes ZIP and ZIPS only; any other compression asked for goes through OpenImageIO.
+    const std::string method = split_compression(layout.compressions.front()).method;
+    if (codec == ExrCodec::Libdeflate && (method == "zip" || method == "zips"))
         m_state->zip_writer =
-            detail::ZipScanlineWriter::open(m_temporary_path, m_path, source, extra_channels, attributes);
-    if (!m_state->zip_writer)
+            detail::ZipScanlineWriter::open(m_temporary_path, m_path, source, layout, attributes);
+    if (!m_state->zip_writer) {
+        const OIIO::ImageSpec spec = m_state->spec;
         open(&spec);
+    }
 }
 
 FrameOutput::FrameOutput(const std::string& path, const NewImageDescription& image,
@@ -233,9 +356,14 @@ void FrameOutput::write_replaced_rows(int row_begin, int row_end, const unsigned
     thread_local std::vector<unsigned char> scratch;
     scratch.resize(pixels * out_bytes);
     unsigned char* out = scratch.data();
-    if (copy_input)
+    if (copy_input && m_state->input_pixel_whole)
         for (size_t p = 0; p < pixels; ++p)
             std::memcpy(out + p * out_bytes, input_native + p * in_bytes, in_bytes);
+    else if (copy_input)
+        for (size_t p = 0; p < pixels; ++p)
+            for (const CopiedBytes& run : m_state->copied)
+                std::memcpy(out + p * out_bytes + run.output_offset,
+                            input_native + p * in_bytes + run.input_offset, run.bytes);
     if (m_state->all_places_half)
         place_halves(pixels, replaced, extra, out);
     else
@@ -295,8 +423,7 @@ void FrameOutput::place_values(size_t pixels, const float* replaced, const float
 
 bool FrameOutput::needs_input_rows() const
 {
-    const detail::OpenFrame* source = m_state->source;
-    return source && static_cast<int>(source->selected.size()) < source->spec.nchannels;
+    return m_state->copies_input;
 }
 
 void FrameOutput::write_float_rows(int row_begin, int row_end, const float* pixels)

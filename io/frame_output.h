@@ -3,11 +3,14 @@
 // full disk or an interrupt never leaves a final-named file that is incomplete.
 // A denoise output copies its input frame's header (channels, pixel types,
 // windows, attributes) and, by default, its parts (a multi-part input gives a
-// multi-part output, each added channel in the part of its layer); a render
-// output is described from scratch.
+// multi-part output, each added channel in the part of its layer); its
+// compression, the type of what it writes anew and which input channels it
+// keeps follow an OutputFormat (output_format.h). A render output is described
+// from scratch.
 #pragma once
 
 #include "io/exr_codec.h"
+#include "io/output_format.h"
 
 #include <memory>
 #include <string>
@@ -54,15 +57,19 @@ class FrameOutput {
 public:
     /// An output that copies frame `frame_index` of `reader` (every channel,
     /// pixel type, window and attribute), with `extra_channels` appended in the
-    /// pixel type of the first selected channel, plus `attributes`. Tiled
-    /// inputs (and tiled parts) are written as scanline files; `codec` encodes
-    /// the copy of a single-part ZIP/ZIPS scanline input; a multi-part input is
-    /// copied part by part with OpenEXR's library (detail/multipart_writer.h)
-    /// unless `parts` flattens it. `reader` must outlive this object.
+    /// pixel type of the first selected channel (an input channel of the same
+    /// name is dropped: they replace it), plus `attributes`; `format`
+    /// changes the compression (by default the input's when lossless, else
+    /// ZIP), the type of the replaced and appended channels, and may keep only
+    /// those. Tiled inputs (and tiled parts) are written as scanline files;
+    /// `codec` encodes a ZIP/ZIPS copy of a single-part ZIP/ZIPS scanline
+    /// input; a multi-part input is copied part by part with OpenEXR's library
+    /// (detail/multipart_writer.h) unless `parts` flattens it. `reader` must
+    /// outlive this object.
     FrameOutput(const std::string& path, const SequenceReader& reader, int frame_index,
                 const std::vector<std::string>& extra_channels,
                 const std::vector<HeaderAttribute>& attributes, ExrCodec codec = ExrCodec::Libdeflate,
-                PartLayout parts = PartLayout::AsInput);
+                PartLayout parts = PartLayout::AsInput, const OutputFormat& format = {});
     /// An output for a new image (always written with OpenImageIO).
     FrameOutput(const std::string& path, const NewImageDescription& image,
                 const std::vector<HeaderAttribute>& attributes);

@@ -9,6 +9,7 @@ target_sources(modestack_io PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/sequence_reader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/zip_scanline_reader.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/exr_core.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/output_format.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_output.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/zip_scanline_writer.cpp
   ${CMAKE_CURRENT_LIST_DIR}/detail/multipart_writer.cpp

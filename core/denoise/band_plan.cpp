@@ -62,24 +62,35 @@ BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, const
     plan.halo_rows = needs.halo_rows;
     plan.budget_bytes = max_memory_bytes;
     const std::int64_t input_row = input_bytes_per_row(shape);
+    // Several layers: the rows decoded for all of them, per row of a band with
+    // its halo (and while a kept shot is read, a few whole frames of it), and
+    // the rebuilt values and sigma of the band's own rows gathered for the write.
+    const std::int64_t shared_row = needs.shared_rows ? input_row : 0;
+    const std::int64_t shared_read =
+        needs.shared_rows
+            ? input_row / shape.frames * std::min(shape.frames, needs.shared_frames) * shape.height
+            : 0;
     const int smallest_band = std::min(kChunkRows, shape.height);
     const std::int64_t kept = input_row * shape.height;
+    const auto kept_bytes = [&](int rows) {
+        return kept + std::max(shared_read, shared_row * (3 * rows + 2 * needs.halo_rows)) +
+               pass_two_bytes(shape, needs, rows, true);
+    };
     // The kept shot: the largest band (a multiple of kChunkRows, at most
     // kMaxKeptBandRows) whose pass 2 fits beside it.
-    if (kept + pass_two_bytes(shape, needs, smallest_band, true) <= max_memory_bytes) {
+    if (kept_bytes(smallest_band) <= max_memory_bytes) {
         plan.in_memory = true;
-        plan.band_rows = largest_band(std::min(kMaxKeptBandRows, shape.height), [&](int rows) {
-            return kept + pass_two_bytes(shape, needs, rows, true) <= max_memory_bytes;
-        });
-        plan.estimated_bytes = kept + pass_two_bytes(shape, needs, plan.band_rows, true);
+        plan.band_rows = largest_band(std::min(kMaxKeptBandRows, shape.height),
+                                      [&](int rows) { return kept_bytes(rows) <= max_memory_bytes; });
+        plan.estimated_bytes = kept_bytes(plan.band_rows);
         return plan;
     }
     // Streaming: a read band with its halo and the source's rows, pass 2's
     // buffers and the outlier marks.
     const std::int64_t marks = samples_per_row(shape) * shape.height;
     const auto streamed_bytes = [&](int rows) {
-        return marks + (input_row + needs.source_row_bytes) * (rows + 2 * needs.halo_rows) +
-               pass_two_bytes(shape, needs, rows, false);
+        return marks + (input_row + shared_row + needs.source_row_bytes) * (rows + 2 * needs.halo_rows) +
+               2 * shared_row * rows + pass_two_bytes(shape, needs, rows, false);
     };
     if (streamed_bytes(smallest_band) > max_memory_bytes)
         throw usage_error(fmt::format("--max-memory leaves {} MiB for the shot's data, too little for {} frames of "

@@ -38,6 +38,12 @@ struct PassNeeds {
     /// choice reads the band's input rows after sigma, and holds the input rows
     /// the choice reads as the source gives them (about as many rows again).
     int choice_rows = 0;
+    /// Several layers' runs (layer_runs.h): beside each layer's own rows, the
+    /// rows decoded for all of them are held for a band of every frame (and, of
+    /// a kept shot, for `shared_frames` whole frames while it is read), and so
+    /// are the band's rebuilt values and sigma until every layer has given them.
+    bool shared_rows = false;
+    int shared_frames = 0;
 };
 
 /// The chosen way through a shot.

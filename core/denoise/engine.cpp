@@ -1,6 +1,7 @@
 #include "core/denoise/engine.h"
 
 #include "core/common/error.h"
+#include "core/denoise/layer_runs.h"
 #include "core/denoise/passes.h"
 
 #include <fmt/format.h>
@@ -43,8 +44,10 @@ std::string solver_name(Solver solver)
 
 Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& settings, Progress& progress)
 {
-    const PassContext context{source, sink, settings, progress};
     const ShotShape shape = source.shape();
+    if (settings.layer_channels.size() > 1)
+        return merge_layer_reports(run_layers(source, sink, settings, progress), shape);
+    const PassContext context{source, sink, settings, progress};
     check_settings(settings, shape);
     const RunPlan plan = plan_run(context, true);
     Report report;

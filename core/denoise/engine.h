@@ -82,6 +82,10 @@ struct Settings {
     /// --estimators: a per-pixel choice among the rebuild and other estimators
     /// (estimator_choice.h); none enabled: the rebuild everywhere.
     EstimatorOptions estimators;
+    /// Channels of each layer denoised on its own modes and N, in the order of
+    /// the selected channels (layer_runs.h); empty or one layer: every channel
+    /// shares the modes (--joint).
+    std::vector<int> layer_channels;
     /// --report: also report pt(t, j) for j < max(2N, report_modes), capped at F − 1
     /// and at the modes found (Report::preview_temporal_modes, the rank slider); 0: none.
     int report_modes = 0;
@@ -112,6 +116,9 @@ struct Report {
     double seconds_statistics = 0;        ///< pass 1 (read + clean + Gram)
     double seconds_solve = 0;             ///< eigensolve or randomized SVD, and the rank rule
     double seconds_rebuild = 0;           ///< pass 2 (read + rebuild + sigma + write)
+    /// Each layer's own report when the layers have their own modes
+    /// (Settings::layer_channels), in order; empty otherwise.
+    std::vector<Report> layers;
 };
 
 /// Denoises `source` into `sink`: every pass of passes.h in order. Throws

@@ -230,7 +230,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     const lowrank::ImageBandShape image{shape.width, shape.height, shape.channels};
     const Eigen::MatrixXd output_temporal = modes.temporal.leftCols(std::max(shot.output_modes, 1));
     report.passes = 1;
-    context.sink.begin({modes.kept_modes, report.rank_decision.rule, report.solver});
+    context.sink.begin({modes.kept_modes, report.rank_decision.rule, report.solver, {}});
     context.progress.begin(fmt::format("writing {} of {} frames", written.size(), shape.frames),
                            static_cast<std::int64_t>(written.size()));
     struct Buffers {

@@ -104,6 +104,8 @@ struct RebuildStart {
     int kept_modes = 0;
     std::string rank_rule;
     std::string solver;
+    /// Each layer's N when the layers have their own modes (Settings::layer_channels); empty: one N.
+    std::vector<int> layer_modes;
 };
 
 /// Receives the result, band after band in increasing row order.

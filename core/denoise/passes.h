@@ -8,10 +8,13 @@
 #pragma once
 
 #include "core/denoise/band_rebuild.h"
+#include "core/denoise/block_gram.h"
 #include "core/denoise/engine.h"
 #include "core/denoise/shot_stream.h"
 #include "core/denoise/stage_task.h"
 #include "core/denoise/training.h"
+
+#include <tbb/enumerable_thread_specific.h>
 
 #include <optional>
 
@@ -39,6 +42,14 @@ struct RunPlan {
 /// (N out of range, options that need each other).
 void check_settings(const Settings& settings, const ShotShape& shape);
 
+/// What pass 2 and the survey hold for a band (band_plan.h) of `shape` with
+/// these settings and mode filter, the source keeping `source_row_bytes` per
+/// row of a streamed band.
+PassNeeds pass_needs(const Settings& settings, const ShotShape& shape, const ModeFilterOptions& filter,
+                     std::int64_t source_row_bytes);
+/// The solver the settings ask for, or auto's choice for the shot.
+Solver plan_solver(const Settings& settings, const ShotShape& shape);
+
 /// Plans the bands and picks the solver for checked settings; `with_features`:
 /// open the mode filter's feature guide (a run or task that filters).
 RunPlan plan_run(const PassContext& context, bool with_features);
@@ -59,6 +70,23 @@ struct Survey {
     lowrank::RankDecision rank_decision;
 };
 
+/// Pass 1 with the Gram solver (or --train-frames) band by band, and the solve.
+class GramPass {
+public:
+    GramPass(const Settings& settings, const ShotShape& shape);
+    /// Adds a band of a pass over the shot (ShotStream::BandPass), in row order.
+    void add(Band& band);
+    /// The modes and N from every band's sums.
+    Solution finish();
+
+private:
+    const Settings& m_settings;
+    ShotShape m_shape;
+    BlockGram m_gram;
+    std::optional<TrainingGram> m_training;
+    std::vector<float> m_scratch;
+};
+
 /// Pass 1 of a whole run with the Gram solver (or --train-frames) and the solve.
 Solution gram_solution(const PassContext& context, ShotStream& stream);
 /// The randomized SVD's passes over the shot and the solve.
@@ -72,6 +100,31 @@ Statistics block_statistics(const PassContext& context, ShotStream& stream, int 
 /// Modes the mode filter surveys (and the K of its noise estimate): at most F − 2
 /// so that the noise estimate has two degrees of freedom, at least a fixed N.
 int survey_modes(const Settings& settings, const ShotShape& shape, const lowrank::Basis& basis);
+
+/// The mode filter's survey of image rows [row_begin, row_end) band by band:
+/// the kept shot or bands with their halo of a whole run, or (`task`) bands
+/// read by a farm task.
+class SurveyPass {
+public:
+    SurveyPass(const PassContext& context, ShotStream& stream, const RunPlan& plan, const Solution& solution,
+               int row_begin, int row_end, bool task);
+    /// Adds rows [row, end): the next band of at most plan.bands.band_rows rows.
+    void add_rows(int row, int end);
+    /// The survey's sums of every row (SureSurvey::row_sums).
+    std::vector<std::vector<double>> finish();
+
+private:
+    const PassContext& m_context;
+    ShotStream& m_stream;
+    const RunPlan& m_plan;
+    bool m_task;
+    int m_row_begin, m_row_end;
+    int m_modes;
+    Eigen::MatrixXd m_temporal;
+    SureSurvey m_survey;
+    Band m_band;
+    std::vector<float> m_coefficients, m_noise_variance, m_features;
+};
 
 /// The survey's sums of image rows [row_begin, row_end) (SureSurvey::row_sums):
 /// the kept shot or bands with their halo of a whole run, or (`task`) bands read
@@ -103,6 +156,38 @@ struct RebuildReport {
     NonNegativeCounts non_negative;
     RankMapSummary rank_map;
     std::vector<ChoiceCounts> estimator_choice; ///< per frame (--estimators; empty: none)
+};
+
+/// Pass 2 band by band: every frame rebuilt into the sink. Starts the sink (begin) on construction.
+class RebuildPass {
+public:
+    RebuildPass(const PassContext& context, ShotStream& stream, const RunPlan& plan, const Solution& solution,
+                const Survey& survey, const RebuildBasis& modes);
+    /// Rebuilds and writes rows [row, end) of every frame: the next band of at
+    /// most plan.bands.band_rows rows.
+    void add_rows(int row, int end);
+    RebuildReport finish();
+
+private:
+    struct Chosen { // one frame's estimator choice
+        std::vector<float> values, sigma;
+        std::vector<std::uint8_t> estimators; // per pixel
+    };
+    const PassContext& m_context;
+    ShotStream& m_stream;
+    const RunPlan& m_plan;
+    const Solution& m_solution;
+    const RebuildBasis& m_modes;
+    BandRebuilder m_rebuilder;
+    RebuildReport m_report;
+    Band m_band;
+    // Reused from band to band: fresh buffers of this size cost the kernel's page
+    // zeroing every band (7.5 % of a 1080p run's time).
+    ScratchBuffer<float> m_kept_sigma; // sigma_from_mean writes every value
+    tbb::enumerable_thread_specific<std::vector<float>> m_kept_noise_of_worker; // one frame's
+    tbb::enumerable_thread_specific<Chosen> m_chosen_of_worker;
+    ScratchBuffer<float> m_raw; // the input rows the choice reads, as the source gives them
+    std::vector<float> m_ranks;
 };
 
 /// Pass 2 of a whole run: every frame rebuilt band by band into the sink.

@@ -58,155 +58,162 @@ ChoiceCounts choose_frame_rows(const Settings& settings, const ChoiceFrame& fram
     return counts;
 }
 
+RebuildPass::RebuildPass(const PassContext& context, ShotStream& stream, const RunPlan& plan,
+                         const Solution& solution, const Survey& survey, const RebuildBasis& modes)
+    : m_context(context), m_stream(stream), m_plan(plan), m_solution(solution), m_modes(modes),
+      m_rebuilder(context.settings, stream.shape(), modes, plan.filter, survey.plan, survey.modes,
+                  plan.features ? &*plan.features : nullptr)
+{
+    const Settings& settings = context.settings;
+    stream.ensure_whole_shot();
+    if (!plan.bands.in_memory) // pass 2 reuses a kept shot: no second read
+        stream.count_pass();
+    context.sink.begin({modes.kept_modes, survey.rank_decision.rule, solver_name(plan.solver), {}});
+    context.progress.begin("rebuilding frames", stream.shape().height);
+    if (settings.rank_map.enabled)
+        m_report.rank_map.largest_rank = modes.rebuild_modes;
+    if (settings.estimators.enabled())
+        m_report.estimator_choice.assign(static_cast<size_t>(stream.shape().frames), {});
+}
+
+void RebuildPass::add_rows(int row, int end)
+{
+    const Settings& settings = m_context.settings;
+    FrameSink& sink = m_context.sink;
+    const ShotShape& shape = m_stream.shape();
+    const RebuildBasis& modes = m_modes;
+    BandRebuilder& rebuilder = m_rebuilder;
+    const bool kept = m_plan.bands.in_memory;
+    const bool rank_map = settings.rank_map.enabled, filter = settings.mode_filter.enabled;
+    const int frames = shape.frames, output = modes.output_modes, kept_modes = modes.kept_modes;
+    const std::int64_t row_samples = m_stream.row_samples();
+    const EstimatorOptions& estimators = settings.estimators;
+    // --estimators: rows around each band are rebuilt too, for the choice's windows.
+    const int reach = estimator_rebuilt_reach(estimators);
+    const int input_reach = estimator_input_reach(estimators);
+    Band& band = m_band;
+    ScratchBuffer<float>& kept_sigma = m_kept_sigma;
+    ScratchBuffer<float>& raw = m_raw;
+    std::vector<float>& ranks = m_ranks;
+    RebuildReport& report = m_report;
+
+    Band& data = m_stream.band_with_halo(band, row, end, true);
+    throw_if_cancelled();
+    // Rows [first, last) are rebuilt, with their sigma: the band's own, and
+    // the choice's reach around them.
+    const int first = std::max(0, row - reach), last = std::min(shape.height, end + reach);
+    const std::int64_t offset = (first - data.row_begin) * row_samples, valid = (last - first) * row_samples;
+    // Sigma of the rebuilt rows: prepare leaves each frame's windowed residual
+    // mean there (the pass that finds s²), finished frame by frame. A
+    // streamed band's own input rows hold it (nothing reads them after
+    // prepare); a kept shot's must stay, and so must the input the choice
+    // reads, so sigma then gets its own buffer.
+    float* sigma = nullptr;
+    std::int64_t sigma_stride = valid;
+    if (kept || estimators.enabled()) {
+        kept_sigma.resize(static_cast<size_t>(valid) * frames);
+        sigma = kept_sigma.data();
+    } else {
+        sigma = band.storage.data() + offset;
+        sigma_stride = data.stride;
+    }
+    rebuilder.prepare(data, first, last, nullptr, rank_map ? &ranks : nullptr, sigma, sigma_stride);
+    // rebuilt() holds the unfiltered rebuild of sigma's rows; the output goes over its rebuilt ones.
+    const auto [residual_begin, residual_end] = rebuilder.sigma_rows(data, first, last);
+    const std::int64_t rebuilt_stride = (residual_end - residual_begin) * row_samples;
+    const lowrank::ImageBandShape residual_shape{shape.width, residual_end - residual_begin, shape.channels};
+    const int first_valid = first - residual_begin, last_valid = last - residual_begin;
+    auto kept_noise_of = [&](int t, std::vector<float>& kept_noise) {
+        kept_noise.resize(static_cast<size_t>(valid));
+        rebuilder.kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes, rebuilder.gains().data(), valid,
+                                      kept_noise.data());
+    };
+    tbb::parallel_for(0, frames, [&](int t) {
+        std::vector<float>& kept_noise = m_kept_noise_of_worker.local(); // nothing below runs in parallel
+        if (filter)
+            kept_noise_of(t, kept_noise);
+        lowrank::sigma_from_mean(residual_shape, first_valid, last_valid, rebuilder.confidence(),
+                                 rebuilder.noise_variance().data(), modes.leverages(t),
+                                 filter ? kept_noise.data() : nullptr, sigma + t * sigma_stride);
+    });
+    lowrank::MutableBandView output_view{rebuilder.rebuilt().data() + (first - residual_begin) * row_samples,
+                                         valid, frames, rebuilt_stride};
+    if (output > 0) // the rebuilt rows from the changed coefficients
+        lowrank::rebuild_from_coefficients(
+            {rebuilder.coefficients().data() + offset, valid, output, data.rows},
+            modes.temporal.leftCols(output), output_view);
+    // Counted over the band's own rows only (the rows around it belong to other bands).
+    const std::int64_t own_offset = (row - first) * row_samples, own = (end - row) * row_samples;
+    auto rows_of = [&](std::int64_t from, std::int64_t count) {
+        return lowrank::MutableBandView{output_view.data + from, count, frames, output_view.frame_stride};
+    };
+    make_non_negative(rows_of(0, own_offset), settings.non_negative, settings.non_negative_floor);
+    report.non_negative +=
+        make_non_negative(rows_of(own_offset, own), settings.non_negative, settings.non_negative_floor);
+    make_non_negative(rows_of(own_offset + own, valid - own_offset - own), settings.non_negative,
+                      settings.non_negative_floor);
+
+    const int raw_begin = std::max(0, row - input_reach), raw_end = std::min(shape.height, end + input_reach);
+    if (estimators.enabled())
+        m_stream.read_raw_rows(raw_begin, raw_end, data, raw);
+    const std::int64_t raw_rows = (raw_end - raw_begin) * row_samples;
+    tbb::parallel_for(0, frames, [&](int frame) { // a window of the kept shot has no pass-through rows
+        const PassThroughRows* pass_through =
+            data.pass_through.empty() ? nullptr : &data.pass_through[static_cast<size_t>(frame)];
+        const float* frame_sigma = sigma + frame * sigma_stride;
+        const float* frame_output = output_view.data + frame * output_view.frame_stride;
+        if (!estimators.enabled()) {
+            sink.write_rows(frame, row, end, frame_output + own_offset, frame_sigma + own_offset,
+                            pass_through);
+            return;
+        }
+        // Made again rather than kept from sigma's loop: one frame per worker, not every frame's.
+        std::vector<float>& kept_noise = m_kept_noise_of_worker.local();
+        if (filter)
+            kept_noise_of(frame, kept_noise);
+        ChoiceFrame choice_frame;
+        choice_frame.image = {shape.width, shape.height, shape.channels};
+        choice_frame.input = raw.data() + frame * raw_rows;
+        choice_frame.input_begin = raw_begin, choice_frame.input_end = raw_end;
+        choice_frame.rebuilt = frame_output, choice_frame.sigma = frame_sigma;
+        choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;
+        choice_frame.leverage = modes.leverages(frame);
+        choice_frame.rebuilt_begin = first, choice_frame.rebuilt_end = last;
+        Chosen& chosen = m_chosen_of_worker.local();
+        chosen.values.resize(static_cast<size_t>(own)), chosen.sigma.resize(static_cast<size_t>(own));
+        chosen.estimators.resize(static_cast<size_t>(shape.width) * (end - row));
+        report.estimator_choice[static_cast<size_t>(frame)].add(
+            choose_frame_rows(settings, choice_frame, row, end, chosen.values.data(), chosen.sigma.data(),
+                              chosen.estimators.data()));
+        sink.write_rows(frame, row, end, chosen.values.data(), chosen.sigma.data(), pass_through);
+        sink.write_choice_rows(frame, row, end, chosen.estimators.data());
+    });
+    if (sink.wants_modes())
+        write_spatial_modes(sink, shape, rebuilder.coefficients(), data, m_solution, kept_modes, row, end,
+                            (row - data.row_begin) * row_samples);
+    if (rank_map) {
+        sink.write_rank_rows(row, end, ranks.data());
+        report.rank_map.add(ranks);
+    }
+    m_context.progress.advance(end - row);
+}
+
+RebuildReport RebuildPass::finish()
+{
+    if (m_context.settings.rank_map.enabled)
+        m_report.rank_map.finish();
+    m_context.progress.end();
+    return std::move(m_report);
+}
+
 RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const RunPlan& plan,
                            const Solution& solution, const Survey& survey, const RebuildBasis& modes)
 {
-    const Settings& settings = context.settings;
-    const ShotShape& shape = stream.shape();
-    const int kept_modes = modes.kept_modes;
-    const bool rank_map = settings.rank_map.enabled, filter = settings.mode_filter.enabled;
-    const int frames = shape.frames, output = modes.output_modes;
-    const std::int64_t row_samples = stream.row_samples();
-    BandRebuilder rebuilder(settings, shape, modes, plan.filter, survey.plan, survey.modes,
-                            plan.features ? &*plan.features : nullptr);
-    RebuildReport report;
-
-    const bool kept = plan.bands.in_memory; // pass 2 reuses the kept shot: no second read
-    stream.ensure_whole_shot();
-    if (!kept)
-        stream.count_pass();
-    context.sink.begin({kept_modes, survey.rank_decision.rule, solver_name(plan.solver)});
-    context.progress.begin("rebuilding frames", shape.height);
-    if (rank_map)
-        report.rank_map.largest_rank = modes.rebuild_modes;
-    Band band;
-    // Reused from band to band: fresh buffers of this size cost the kernel's page
-    // zeroing every band (7.5 % of a 1080p run's time).
-    ScratchBuffer<float> kept_sigma; // sigma_from_mean writes every value
-    tbb::enumerable_thread_specific<std::vector<float>> kept_noise_of_worker; // one frame's
-    std::vector<float> ranks;
-    // --estimators: rows around each band are rebuilt too, for the choice's windows.
-    const EstimatorOptions& estimators = settings.estimators;
-    const int reach = estimator_rebuilt_reach(estimators);
-    struct Chosen {
-        std::vector<float> values, sigma;
-        std::vector<std::uint8_t> estimators; // per pixel
-    };
-    tbb::enumerable_thread_specific<Chosen> chosen_of_worker;
-    ScratchBuffer<float> raw; // the input rows the choice reads, as the source gives them
-    const int input_reach = estimator_input_reach(estimators);
-    if (estimators.enabled())
-        report.estimator_choice.assign(static_cast<size_t>(frames), {});
-    for (int row = 0; row < shape.height; row += plan.bands.band_rows) {
-        const int end = std::min(shape.height, row + plan.bands.band_rows);
-        Band& data = stream.band_with_halo(band, row, end, true);
-        throw_if_cancelled();
-        // Rows [first, last) are rebuilt, with their sigma: the band's own, and
-        // the choice's reach around them.
-        const int first = std::max(0, row - reach), last = std::min(shape.height, end + reach);
-        const std::int64_t offset = (first - data.row_begin) * row_samples,
-                           valid = (last - first) * row_samples;
-        // Sigma of the rebuilt rows: prepare leaves each frame's windowed residual
-        // mean there (the pass that finds s²), finished frame by frame. A
-        // streamed band's own input rows hold it (nothing reads them after
-        // prepare); a kept shot's must stay, and so must the input the choice
-        // reads, so sigma then gets its own buffer.
-        float* sigma = nullptr;
-        std::int64_t sigma_stride = valid;
-        if (kept || estimators.enabled()) {
-            kept_sigma.resize(static_cast<size_t>(valid) * frames);
-            sigma = kept_sigma.data();
-        } else {
-            sigma = band.storage.data() + offset;
-            sigma_stride = data.stride;
-        }
-        rebuilder.prepare(data, first, last, nullptr, rank_map ? &ranks : nullptr, sigma, sigma_stride);
-        // rebuilt() holds the unfiltered rebuild of sigma's rows; the output goes over its rebuilt ones.
-        const auto [residual_begin, residual_end] = rebuilder.sigma_rows(data, first, last);
-        const std::int64_t rebuilt_stride = (residual_end - residual_begin) * row_samples;
-        const lowrank::ImageBandShape residual_shape{shape.width, residual_end - residual_begin,
-                                                     shape.channels};
-        const int first_valid = first - residual_begin, last_valid = last - residual_begin;
-        auto kept_noise_of = [&](int t, std::vector<float>& kept_noise) {
-            kept_noise.resize(static_cast<size_t>(valid));
-            rebuilder.kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes, rebuilder.gains().data(),
-                                          valid, kept_noise.data());
-        };
-        tbb::parallel_for(0, frames, [&](int t) {
-            std::vector<float>& kept_noise = kept_noise_of_worker.local(); // nothing below runs in parallel
-            if (filter)
-                kept_noise_of(t, kept_noise);
-            lowrank::sigma_from_mean(residual_shape, first_valid, last_valid, rebuilder.confidence(),
-                                     rebuilder.noise_variance().data(), modes.leverages(t),
-                                     filter ? kept_noise.data() : nullptr, sigma + t * sigma_stride);
-        });
-        lowrank::MutableBandView output_view{rebuilder.rebuilt().data() +
-                                                 (first - residual_begin) * row_samples,
-                                             valid, frames, rebuilt_stride};
-        if (output > 0) // the rebuilt rows from the changed coefficients
-            lowrank::rebuild_from_coefficients(
-                {rebuilder.coefficients().data() + offset, valid, output, data.rows},
-                modes.temporal.leftCols(output), output_view);
-        // Counted over the band's own rows only (the rows around it belong to other bands).
-        const std::int64_t own_offset = (row - first) * row_samples, own = (end - row) * row_samples;
-        auto rows_of = [&](std::int64_t from, std::int64_t count) {
-            return lowrank::MutableBandView{output_view.data + from, count, frames, output_view.frame_stride};
-        };
-        make_non_negative(rows_of(0, own_offset), settings.non_negative, settings.non_negative_floor);
-        report.non_negative +=
-            make_non_negative(rows_of(own_offset, own), settings.non_negative, settings.non_negative_floor);
-        make_non_negative(rows_of(own_offset + own, valid - own_offset - own), settings.non_negative,
-                          settings.non_negative_floor);
-
-        const int raw_begin = std::max(0, row - input_reach),
-                  raw_end = std::min(shape.height, end + input_reach);
-        if (estimators.enabled())
-            stream.read_raw_rows(raw_begin, raw_end, data, raw);
-        const std::int64_t raw_rows = (raw_end - raw_begin) * row_samples;
-        tbb::parallel_for(0, frames, [&](int frame) { // a window of the kept shot has no pass-through rows
-            const PassThroughRows* pass_through =
-                data.pass_through.empty() ? nullptr : &data.pass_through[static_cast<size_t>(frame)];
-            const float* frame_sigma = sigma + frame * sigma_stride;
-            const float* frame_output = output_view.data + frame * output_view.frame_stride;
-            if (!estimators.enabled()) {
-                context.sink.write_rows(frame, row, end, frame_output + own_offset, frame_sigma + own_offset,
-                                        pass_through);
-                return;
-            }
-            // Made again rather than kept from sigma's loop: one frame per worker, not every frame's.
-            std::vector<float>& kept_noise = kept_noise_of_worker.local();
-            if (filter)
-                kept_noise_of(frame, kept_noise);
-            ChoiceFrame choice_frame;
-            choice_frame.image = {shape.width, shape.height, shape.channels};
-            choice_frame.input = raw.data() + frame * raw_rows;
-            choice_frame.input_begin = raw_begin, choice_frame.input_end = raw_end;
-            choice_frame.rebuilt = frame_output, choice_frame.sigma = frame_sigma;
-            choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;
-            choice_frame.leverage = modes.leverages(frame);
-            choice_frame.rebuilt_begin = first, choice_frame.rebuilt_end = last;
-            Chosen& chosen = chosen_of_worker.local();
-            chosen.values.resize(static_cast<size_t>(own)), chosen.sigma.resize(static_cast<size_t>(own));
-            chosen.estimators.resize(static_cast<size_t>(shape.width) * (end - row));
-            report.estimator_choice[static_cast<size_t>(frame)].add(
-                choose_frame_rows(settings, choice_frame, row, end, chosen.values.data(), chosen.sigma.data(),
-                                  chosen.estimators.data()));
-            context.sink.write_rows(frame, row, end, chosen.values.data(), chosen.sigma.data(), pass_through);
-            context.sink.write_choice_rows(frame, row, end, chosen.estimators.data());
-        });
-        if (context.sink.wants_modes())
-            write_spatial_modes(context.sink, shape, rebuilder.coefficients(), data, solution, kept_modes,
-                                row, end, (row - data.row_begin) * row_samples);
-        if (rank_map) {
-            context.sink.write_rank_rows(row, end, ranks.data());
-            report.rank_map.add(ranks);
-        }
-        context.progress.advance(end - row);
-    }
-    if (rank_map)
-        report.rank_map.finish();
-    context.progress.end();
-    return report;
+    RebuildPass pass(context, stream, plan, solution, survey, modes);
+    const int height = stream.shape().height;
+    for (int row = 0; row < height; row += plan.bands.band_rows)
+        pass.add_rows(row, std::min(height, row + plan.bands.band_rows));
+    return pass.finish();
 }
 
 } // namespace modestack::denoise

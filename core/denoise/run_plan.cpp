@@ -50,11 +50,9 @@ void check_settings(const Settings& settings, const ShotShape& shape)
         throw internal_error("the whitening weights do not match the shot");
 }
 
-RunPlan plan_run(const PassContext& context, bool with_features)
+PassNeeds pass_needs(const Settings& settings, const ShotShape& shape, const ModeFilterOptions& filter,
+                     std::int64_t source_row_bytes)
 {
-    const Settings& settings = context.settings;
-    const ShotShape shape = context.source.shape();
-    RunPlan plan;
     const int largest_rank = settings.rank_rule.rule == lowrank::RankRule::Fixed
                                  ? settings.rank_rule.fixed_modes
                                  : std::min(shape.frames - 1, 32);
@@ -63,14 +61,9 @@ RunPlan plan_run(const PassContext& context, bool with_features)
     PassNeeds needs;
     needs.halo_rows = needs.sigma_halo_rows = settings.sigma_radius + 1;
     needs.halo_images = largest_rank; // the projected coefficients
-    needs.source_row_bytes = context.source.band_bytes_per_row();
-    plan.filter = settings.mode_filter;
+    needs.source_row_bytes = source_row_bytes;
     if (settings.mode_filter.enabled) {
-        if (!settings.feature_guide.kinds.empty() && with_features) {
-            plan.features.emplace(context.source, settings.feature_guide, context.progress);
-            plan.filter.feature_channels = plan.features->channels();
-        }
-        needs.halo_rows = std::max(needs.halo_rows, mode_filter_halo(plan.filter));
+        needs.halo_rows = std::max(needs.halo_rows, mode_filter_halo(filter));
         // Over the halo: the surveyed coefficients, the guide with its noise (a
         // few images) and the feature rows twice (as read and the guide's planar
         // copy); the survey alone also holds its [pixel][mode] copy. Over the
@@ -78,8 +71,8 @@ RunPlan plan_run(const PassContext& context, bool with_features)
         // noise per worker.
         const int surveyed = std::max(settings.mode_filter.max_modes, largest_rank);
         needs.survey_images = surveyed;
-        needs.halo_images = surveyed + kGuideImages +
-                            2 * ((plan.filter.feature_channels + shape.channels - 1) / shape.channels);
+        needs.halo_images =
+            surveyed + kGuideImages + 2 * ((filter.feature_channels + shape.channels - 1) / shape.channels);
         needs.band_images = 2 * surveyed + tbb::this_task_arena::max_concurrency();
     }
     // Each worker's residual rows (double) of sigma's windows.
@@ -92,12 +85,31 @@ RunPlan plan_run(const PassContext& context, bool with_features)
             std::max(needs.halo_rows + needs.choice_rows, estimator_input_reach(settings.estimators));
         needs.band_images += 10 * tbb::this_task_arena::max_concurrency();
     }
-    plan.bands = plan_bands(shape, settings.max_memory_bytes, needs);
-    plan.solver = settings.solver;
-    if (plan.solver == Solver::Auto)
-        plan.solver = shape.frames >= settings.randomized_from_frames && settings.training_frames.empty()
-                          ? Solver::RandomizedSvd
-                          : Solver::Gram;
+    return needs;
+}
+
+Solver plan_solver(const Settings& settings, const ShotShape& shape)
+{
+    if (settings.solver != Solver::Auto)
+        return settings.solver;
+    return shape.frames >= settings.randomized_from_frames && settings.training_frames.empty()
+               ? Solver::RandomizedSvd
+               : Solver::Gram;
+}
+
+RunPlan plan_run(const PassContext& context, bool with_features)
+{
+    const Settings& settings = context.settings;
+    const ShotShape shape = context.source.shape();
+    RunPlan plan;
+    plan.filter = settings.mode_filter;
+    if (settings.mode_filter.enabled && !settings.feature_guide.kinds.empty() && with_features) {
+        plan.features.emplace(context.source, settings.feature_guide, context.progress);
+        plan.filter.feature_channels = plan.features->channels();
+    }
+    plan.bands = plan_bands(shape, settings.max_memory_bytes,
+                            pass_needs(settings, shape, plan.filter, context.source.band_bytes_per_row()));
+    plan.solver = plan_solver(settings, shape);
     return plan;
 }
 

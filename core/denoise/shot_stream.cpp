@@ -1,5 +1,7 @@
 #include "core/denoise/shot_stream.h"
 
+#include "core/common/error.h"
+
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
@@ -14,6 +16,47 @@ ShotStream::ShotStream(FrameSource& source, const lowrank::OutlierOptions& outli
     : m_source(source), m_outlier_options(outliers), m_plan(plan), m_progress(progress),
       m_shape(source.shape())
 {
+}
+
+ShotStream::BandPass::BandPass(ShotStream& stream) : m_stream(stream), m_first_pass(stream.m_passes == 0)
+{
+    ++m_stream.m_passes;
+    if (m_stream.m_plan.in_memory && !m_first_pass)
+        return;
+    m_stream.begin_pass_progress();
+    m_progress_open = true;
+    if (!m_stream.m_plan.in_memory && m_first_pass)
+        m_stream.m_cleaned_samples.assign(
+            static_cast<size_t>(m_stream.row_samples()) * m_stream.m_shape.height, 0);
+}
+
+Band* ShotStream::BandPass::next()
+{
+    ShotStream& stream = m_stream;
+    const int height = stream.m_shape.height;
+    if (m_advance > 0) {
+        stream.m_progress.advance(m_advance);
+        m_advance = 0;
+    }
+    if (m_row >= height) {
+        if (m_progress_open)
+            stream.m_progress.end();
+        m_progress_open = false;
+        return nullptr;
+    }
+    if (stream.m_plan.in_memory) { // one band: the whole shot
+        m_row = height;
+        if (!m_first_pass || stream.m_whole_read_ahead)
+            return &stream.m_whole;
+        stream.read_band(stream.m_whole, 0, height, Cleaning::Count);
+        m_advance = height;
+        return &stream.m_whole;
+    }
+    const int end = std::min(height, m_row + stream.m_plan.band_rows);
+    stream.read_band(m_band, m_row, end, m_first_pass ? Cleaning::Count : Cleaning::Again);
+    m_advance = end - m_row;
+    m_row = end;
+    return &m_band;
 }
 
 void ShotStream::begin_pass_progress()
@@ -83,6 +126,32 @@ void ShotStream::ensure_whole_shot()
     m_progress.begin(fmt::format("reading {} frames", m_shape.frames), m_shape.height);
     read_band(m_whole, 0, m_shape.height, Cleaning::Again);
     m_progress.end();
+}
+
+void ShotStream::read_whole_frames(int frame_begin, int frame_end)
+{
+    if (!m_plan.in_memory || m_passes > 0 || m_whole_read_ahead)
+        throw internal_error("read_whole_frames: only a kept shot, before its first pass");
+    throw_if_cancelled();
+    if (!m_whole.data) {
+        m_whole.row_begin = 0;
+        m_whole.row_end = m_shape.height;
+        m_whole.rows = m_whole.stride = row_samples() * m_shape.height;
+        m_whole.storage.resize(static_cast<size_t>(m_whole.rows) * m_shape.frames);
+        m_whole.data = m_whole.storage.data();
+    }
+    tbb::parallel_for(frame_begin, frame_end, [&](int frame) {
+        m_source.read_rows(frame, 0, m_shape.height, m_whole.data + frame * m_whole.rows, nullptr);
+    });
+}
+
+void ShotStream::finish_whole_shot()
+{
+    const lowrank::OutlierCounts found =
+        lowrank::clean_outliers(m_whole.view(m_shape.frames), m_outlier_options, nullptr);
+    m_outliers.non_finite += found.non_finite;
+    m_outliers.fireflies += found.fireflies;
+    m_whole_read_ahead = true;
 }
 
 Band& ShotStream::band_with_halo(Band& band, int row, int end, bool with_pass_through)

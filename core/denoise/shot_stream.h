@@ -55,33 +55,36 @@ public:
     /// the outliers and marks the cleaned samples.
     template <typename Visit> void for_each_band(Visit&& visit)
     {
-        const bool first_pass = m_passes == 0;
-        ++m_passes;
-        if (m_plan.in_memory && !first_pass) {
-            visit(m_whole);
-            return;
-        }
-        begin_pass_progress();
-        if (m_plan.in_memory) {
-            read_band(m_whole, 0, m_shape.height, Cleaning::Count);
-            visit(m_whole);
-            m_progress.advance(m_shape.height);
-        } else {
-            if (first_pass)
-                m_cleaned_samples.assign(static_cast<size_t>(row_samples()) * m_shape.height, 0);
-            Band band;
-            for (int row = 0; row < m_shape.height; row += m_plan.band_rows) {
-                const int end = std::min(m_shape.height, row + m_plan.band_rows);
-                read_band(band, row, end, first_pass ? Cleaning::Count : Cleaning::Again);
-                visit(band);
-                m_progress.advance(end - row);
-            }
-        }
-        m_progress.end();
+        BandPass pass(*this);
+        while (Band* band = pass.next())
+            visit(*band);
     }
+
+    /// for_each_band one band at a time, for a caller that interleaves the
+    /// passes of several streams over the same files (layer_runs.h).
+    class BandPass {
+    public:
+        explicit BandPass(ShotStream& stream);
+        /// The next band (valid until the next call), or null after the last.
+        Band* next();
+
+    private:
+        ShotStream& m_stream;
+        bool m_first_pass = false;
+        bool m_progress_open = false;
+        int m_row = 0;     // first row of the next band
+        int m_advance = 0; // rows of the band handed out last, counted as done at the next call
+        Band m_band;
+    };
 
     /// The kept shot, read and cleaned now when no earlier pass read it (a farm task).
     void ensure_whole_shot();
+    /// A kept shot read ahead of the first pass, frames [frame_begin, frame_end)
+    /// at a time, so that several layers' streams can share each decoded frame
+    /// and let it go (layer_runs.h); finish_whole_shot() then cleans and counts
+    /// it, and the first pass visits it without reading.
+    void read_whole_frames(int frame_begin, int frame_end);
+    void finish_whole_shot();
     /// Rows [row, end) of every frame with the plan's halo rows around them: a
     /// window into the kept shot, or read into `band` (`with_pass_through`: with
     /// each frame's other channels, for the writes of pass 2).
@@ -122,6 +125,7 @@ private:
     int m_passes = 0;
     lowrank::OutlierCounts m_outliers;
     Band m_whole; // the kept shot, when it fits in memory
+    bool m_whole_read_ahead = false; // read and cleaned by read_whole_frames and finish_whole_shot
     // Streaming: 1 for each sample whose row (over frames) the outlier cleaning changed.
     std::vector<std::uint8_t> m_cleaned_samples;
     struct PatchRows {

@@ -28,6 +28,8 @@ set_source_files_properties(
 target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/band_rebuild.cpp
   ${CMAKE_CURRENT_LIST_DIR}/farm_tasks.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/layer_runs.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/layer_views.cpp
   ${CMAKE_CURRENT_LIST_DIR}/rebuild_pass.cpp
   ${CMAKE_CURRENT_LIST_DIR}/run_plan.cpp
   ${CMAKE_CURRENT_LIST_DIR}/shot_stream.cpp

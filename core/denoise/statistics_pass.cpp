@@ -69,28 +69,36 @@ Solution solved(lowrank::Basis basis, const Settings& settings, std::optional<Tr
 
 } // namespace
 
-Solution gram_solution(const PassContext& context, ShotStream& stream)
+GramPass::GramPass(const Settings& settings, const ShotShape& shape)
+    : m_settings(settings), m_shape(shape), m_gram(settings.training_frames.empty() ? shape.frames : 1, false)
 {
-    const Settings& settings = context.settings;
-    const ShotShape& shape = stream.shape();
-    const bool training = !settings.training_frames.empty(); // --train-frames: training.h
-    BlockGram gram(training ? 1 : shape.frames, false);
-    std::optional<TrainingGram> training_gram;
-    if (training)
-        training_gram.emplace(shape.frames, settings.training_frames);
-    std::vector<float> scratch;
-    stream.for_each_band([&](Band& band) {
-        for_each_chunk(shape, band, [&](int row, const lowrank::BandView& chunk) {
-            visit_whitened(settings, shape, band, chunk, scratch, [&](const lowrank::BandView& rows) {
-                training ? training_gram->add(rows) : gram.add(row, rows);
-            });
+    if (!settings.training_frames.empty()) // --train-frames: training.h
+        m_training.emplace(shape.frames, settings.training_frames);
+}
+
+void GramPass::add(Band& band)
+{
+    for_each_chunk(m_shape, band, [&](int row, const lowrank::BandView& chunk) {
+        visit_whitened(m_settings, m_shape, band, chunk, m_scratch, [&](const lowrank::BandView& rows) {
+            m_training ? m_training->add(rows) : m_gram.add(row, rows);
         });
     });
-    gram.finish();
+}
+
+Solution GramPass::finish()
+{
+    m_gram.finish();
     const auto start = Clock::now();
-    lowrank::Basis basis = training ? training_gram->basis() : lowrank::basis_from_gram(gram.total());
+    lowrank::Basis basis = m_training ? m_training->basis() : lowrank::basis_from_gram(m_gram.total());
     basis.passes = 1;
-    return solved(std::move(basis), settings, std::move(training_gram), seconds_since(start));
+    return solved(std::move(basis), m_settings, std::move(m_training), seconds_since(start));
+}
+
+Solution gram_solution(const PassContext& context, ShotStream& stream)
+{
+    GramPass gram(context.settings, stream.shape());
+    stream.for_each_band([&](Band& band) { gram.add(band); });
+    return gram.finish();
 }
 
 Solution randomized_solution(const PassContext& context, ShotStream& stream)

@@ -19,40 +19,53 @@ int survey_modes(const Settings& settings, const ShotShape& shape, const lowrank
     return std::max(1, modes);
 }
 
-std::vector<std::vector<double>> survey_rows(const PassContext& context, ShotStream& stream,
-                                             const RunPlan& plan, const Solution& solution, int row_begin,
-                                             int row_end, bool task)
+SurveyPass::SurveyPass(const PassContext& context, ShotStream& stream, const RunPlan& plan,
+                       const Solution& solution, int row_begin, int row_end, bool task)
+    : m_context(context), m_stream(stream), m_plan(plan), m_task(task), m_row_begin(row_begin),
+      m_row_end(row_end), m_modes(survey_modes(context.settings, stream.shape(), solution.basis)),
+      m_temporal(solution.basis.temporal.leftCols(m_modes)),
+      m_survey(plan.filter, stream.shape().width, stream.shape().height, stream.shape().channels, m_modes)
 {
-    const ShotShape& shape = stream.shape();
-    const int modes = survey_modes(context.settings, shape, solution.basis);
-    const Eigen::MatrixXd temporal = solution.basis.temporal.leftCols(modes);
-    SureSurvey survey(plan.filter, shape.width, shape.height, shape.channels, modes);
     if (!task)
         stream.ensure_whole_shot();
     if (task || !plan.bands.in_memory)
         stream.count_pass();
     context.progress.begin("mode filter: choosing widths", row_end - row_begin);
-    Band band;
-    std::vector<float> coefficients, noise_variance, features;
-    for (int row = row_begin; row < row_end; row += plan.bands.band_rows) {
-        const int end = std::min(row_end, row + plan.bands.band_rows);
-        Band& data =
-            task ? stream.read_task_band(band, row, end) : stream.band_with_halo(band, row, end, false);
-        lowrank::BandView noisy = data.view(shape.frames).view();
-        coefficients.resize(static_cast<size_t>(data.rows) * modes);
-        lowrank::MutableBandView coefficient_view{coefficients.data(), data.rows, modes, data.rows};
-        lowrank::project_coefficients(noisy, temporal, coefficient_view);
-        lowrank::ImageBandShape band_shape{shape.width, data.row_end - data.row_begin, shape.channels};
-        coefficient_noise_variance(noisy, coefficient_view.view(), band_shape,
-                                   context.settings.mode_filter.noise_radius, noise_variance);
-        survey.add_band(
-            coefficient_view.view(), noise_variance, band_shape, data.row_begin, row - data.row_begin,
-            end - data.row_begin,
-            band_features(plan.filter, plan.features ? &*plan.features : nullptr, data, features));
-        context.progress.advance(end - row);
-    }
-    context.progress.end();
-    return survey.row_sums(row_begin, row_end);
+}
+
+void SurveyPass::add_rows(int row, int end)
+{
+    const ShotShape& shape = m_stream.shape();
+    Band& data =
+        m_task ? m_stream.read_task_band(m_band, row, end) : m_stream.band_with_halo(m_band, row, end, false);
+    lowrank::BandView noisy = data.view(shape.frames).view();
+    m_coefficients.resize(static_cast<size_t>(data.rows) * m_modes);
+    lowrank::MutableBandView coefficient_view{m_coefficients.data(), data.rows, m_modes, data.rows};
+    lowrank::project_coefficients(noisy, m_temporal, coefficient_view);
+    lowrank::ImageBandShape band_shape{shape.width, data.row_end - data.row_begin, shape.channels};
+    coefficient_noise_variance(noisy, coefficient_view.view(), band_shape,
+                               m_context.settings.mode_filter.noise_radius, m_noise_variance);
+    m_survey.add_band(
+        coefficient_view.view(), m_noise_variance, band_shape, data.row_begin, row - data.row_begin,
+        end - data.row_begin,
+        band_features(m_plan.filter, m_plan.features ? &*m_plan.features : nullptr, data, m_features));
+    m_context.progress.advance(end - row);
+}
+
+std::vector<std::vector<double>> SurveyPass::finish()
+{
+    m_context.progress.end();
+    return m_survey.row_sums(m_row_begin, m_row_end);
+}
+
+std::vector<std::vector<double>> survey_rows(const PassContext& context, ShotStream& stream,
+                                             const RunPlan& plan, const Solution& solution, int row_begin,
+                                             int row_end, bool task)
+{
+    SurveyPass survey(context, stream, plan, solution, row_begin, row_end, task);
+    for (int row = row_begin; row < row_end; row += plan.bands.band_rows)
+        survey.add_rows(row, std::min(row_end, row + plan.bands.band_rows));
+    return survey.finish();
 }
 
 Survey finish_survey(const Settings& settings, const ShotShape& shape, const RunPlan& plan,

@@ -2,7 +2,9 @@
 
 #include "core/common/error.h"
 #include "io/detail/open_frame.h"
+#include "io/detail/output_layout.h"
 #include "io/layers.h"
+#include "io/output_format.h"
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
@@ -16,6 +18,7 @@
 #include <OpenEXR/ImfStdIO.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <fstream>
@@ -33,6 +36,19 @@ Imf::PixelType exr_type_of(const OIIO::TypeDesc& type)
     if (type == OIIO::TypeDesc::UINT)
         return Imf::UINT;
     throw internal_error(fmt::format("no OpenEXR pixel type for {}", type.c_str()));
+}
+
+Imf::Compression exr_compression_of(const std::string& method)
+{
+    static const std::map<std::string, Imf::Compression> compressions{
+        {"none", Imf::NO_COMPRESSION},  {"rle", Imf::RLE_COMPRESSION},   {"zips", Imf::ZIPS_COMPRESSION},
+        {"zip", Imf::ZIP_COMPRESSION},  {"piz", Imf::PIZ_COMPRESSION},   {"pxr24", Imf::PXR24_COMPRESSION},
+        {"b44", Imf::B44_COMPRESSION},  {"b44a", Imf::B44A_COMPRESSION}, {"dwaa", Imf::DWAA_COMPRESSION},
+        {"dwab", Imf::DWAB_COMPRESSION}};
+    const auto found = compressions.find(method);
+    if (found == compressions.end())
+        throw internal_error(fmt::format("no OpenEXR compression named '{}'", method));
+    return found->second;
 }
 
 // The system's reason for a failed write (e.g. a full disk), after OpenEXR's.
@@ -80,6 +96,7 @@ struct MultiPartWriter::State {
     std::vector<std::unique_ptr<Imf::OutputPart>> parts;
     struct Channel {
         std::string name; ///< in its part
+        std::string full_name; ///< in the frame as one image (layer-prefixed)
         Imf::PixelType type = Imf::HALF;
         size_t offset = 0; ///< in a pixel as write_rows gets it
     };
@@ -91,8 +108,8 @@ struct MultiPartWriter::State {
 };
 
 MultiPartWriter::MultiPartWriter(const std::string& path, const std::string& reported_path,
-                                 const OpenFrame& source, const std::vector<std::string>& extra_channels,
-                                 OIIO::TypeDesc extra_type, const std::vector<HeaderAttribute>& attributes)
+                                 const OpenFrame& source, const OutputLayout& layout,
+                                 const std::vector<HeaderAttribute>& attributes)
     : m_state(std::make_unique<State>())
 {
     State& state = *m_state;
@@ -100,25 +117,32 @@ MultiPartWriter::MultiPartWriter(const std::string& path, const std::string& rep
     state.origin = {source.spec.x, source.spec.y};
     state.width = source.spec.width;
     state.height = source.spec.height;
-    state.pixel_bytes = source.native_pixel_bytes + extra_channels.size() * extra_type.size();
-    state.channels.resize(source.parts.size());
-    for (const OpenPart& part : source.parts)
-        for (int c = 0; c < part.spec.nchannels; ++c) {
-            const int channel = part.first_channel + c;
-            state.channels[part.subimage].push_back({part.spec.channelnames[c],
-                                                     exr_type_of(source.spec.channelformat(channel)),
-                                                     source.byte_offset[channel]});
+    state.pixel_bytes = layout.pixel_bytes;
+    if (layout.compressions.size() != source.parts.size())
+        throw internal_error("a multi-part output needs a compression per part");
+    std::vector<std::vector<State::Channel>> by_input_part(source.parts.size());
+    for (const OutputChannel& channel : layout.channels) {
+        if (channel.input_channel >= 0) {
+            const OpenPart& part = source.part_of(channel.input_channel);
+            by_input_part[part.subimage].push_back(
+                {part.spec.channelnames[channel.input_channel - part.first_channel], channel.name,
+                 exr_type_of(channel.type), channel.offset});
+            continue;
         }
-    for (size_t k = 0; k < extra_channels.size(); ++k) {
-        const AddedChannelPlace place = added_channel_place(source, extra_channels[k]);
-        for (const State::Channel& existing : state.channels[place.part])
+        const AddedChannelPlace place = added_channel_place(source, channel.name);
+        for (const State::Channel& existing : by_input_part[place.part])
             if (existing.name == place.name)
                 throw bad_input(reported_path,
                                 fmt::format("cannot add channel '{}': part {} of {} has one of that name",
                                             place.name, place.part, source.file));
-        state.channels[place.part].push_back(
-            {place.name, exr_type_of(extra_type), source.native_pixel_bytes + k * extra_type.size()});
+        by_input_part[place.part].push_back(
+            {place.name, channel.name, exr_type_of(channel.type), channel.offset});
     }
+    // One part left (--only-denoised) makes a single-part file, whose readers (modestack, Nuke) take
+    // bare R, G, B as the default layer whatever the part's name: its channels get their layer's name.
+    const bool one_part =
+        std::count_if(by_input_part.begin(), by_input_part.end(),
+                      [](const std::vector<State::Channel>& kept) { return !kept.empty(); }) == 1;
     try {
         std::vector<Imf::Header> headers;
         {
@@ -126,39 +150,55 @@ MultiPartWriter::MultiPartWriter(const std::string& path, const std::string& rep
             if (input.parts() != static_cast<int>(source.parts.size()))
                 throw internal_error(
                     fmt::format("{} has {} parts, not {}", source.file, input.parts(), source.parts.size()));
-            for (int p = 0; p < input.parts(); ++p)
-                headers.push_back(input.header(p));
-        }
-        for (size_t p = 0; p < headers.size(); ++p) {
-            Imf::Header& header = headers[p];
-            if (header.hasTileDescription()) { // written as scanlines, as a single-part tiled input is
-                // A copy without "tiles", not Header::erase: OpenEXR 3.1's erase
-                // drops the attribute without deleting it (LeakSanitizer).
-                Imf::Header scanline;
-                for (Imf::Header::ConstIterator attribute = header.begin(); attribute != header.end();
-                     ++attribute)
-                    if (std::strcmp(attribute.name(), "tiles") != 0)
-                        scanline.insert(attribute.name(), attribute.attribute());
-                header = scanline;
-                if (header.hasType())
+            for (int p = 0; p < input.parts(); ++p) {
+                if (by_input_part[p].empty()) // nothing of it kept: no part
+                    continue;
+                const Imf::Header& input_header = input.header(p);
+                // A copy without what the output changes, not Header::erase: OpenEXR 3.1's
+                // erase drops an attribute without deleting it (LeakSanitizer). Tiled parts
+                // are written as scanline parts, as a single-part tiled input is; the
+                // input's DWA level is no part of the output's compression.
+                Imf::Header header;
+                for (Imf::Header::ConstIterator attribute = input_header.begin();
+                     attribute != input_header.end(); ++attribute)
+                    if (std::strcmp(attribute.name(), "tiles") != 0 &&
+                        std::strcmp(attribute.name(), "dwaCompressionLevel") != 0 &&
+                        std::strcmp(attribute.name(), "channels") != 0)
+                        header.insert(attribute.name(), attribute.attribute());
+                if (header.hasType() && input_header.hasTileDescription())
                     header.setType(Imf::SCANLINEIMAGE);
-            }
-            header.lineOrder() = Imf::INCREASING_Y;
-            for (const State::Channel& channel : state.channels[p])
-                if (!header.channels().findChannel(channel.name))
-                    header.channels().insert(channel.name, Imf::Channel(channel.type));
-            for (const HeaderAttribute& attribute : attributes) {
-                switch (attribute.kind) {
-                case HeaderAttribute::Kind::Text:
-                    header.insert(attribute.name, Imf::StringAttribute(attribute.text));
-                    break;
-                case HeaderAttribute::Kind::Integer:
-                    header.insert(attribute.name, Imf::IntAttribute(static_cast<int>(attribute.integer)));
-                    break;
-                case HeaderAttribute::Kind::Real:
-                    header.insert(attribute.name, Imf::FloatAttribute(static_cast<float>(attribute.real)));
-                    break;
+                header.lineOrder() = Imf::INCREASING_Y;
+                for (State::Channel& channel : by_input_part[p]) {
+                    // The input's sampling and perceptual treatment, in the type written.
+                    const Imf::Channel* kept = input_header.channels().findChannel(channel.name);
+                    Imf::Channel written = kept ? *kept : Imf::Channel(channel.type);
+                    written.type = channel.type;
+                    if (one_part)
+                        channel.name = channel.full_name;
+                    header.channels().insert(channel.name, written);
                 }
+                const CompressionName compression = split_compression(layout.compressions[p]);
+                header.compression() = exr_compression_of(compression.method);
+                if (compression.dwa_level > 0.0f) { // used, and recorded as OpenImageIO records it
+                    header.dwaCompressionLevel() = compression.dwa_level;
+                    header.insert("dwaCompressionLevel", Imf::FloatAttribute(compression.dwa_level));
+                }
+                for (const HeaderAttribute& attribute : attributes) {
+                    switch (attribute.kind) {
+                    case HeaderAttribute::Kind::Text:
+                        header.insert(attribute.name, Imf::StringAttribute(attribute.text));
+                        break;
+                    case HeaderAttribute::Kind::Integer:
+                        header.insert(attribute.name, Imf::IntAttribute(static_cast<int>(attribute.integer)));
+                        break;
+                    case HeaderAttribute::Kind::Real:
+                        header.insert(attribute.name,
+                                      Imf::FloatAttribute(static_cast<float>(attribute.real)));
+                        break;
+                    }
+                }
+                headers.push_back(header);
+                state.channels.push_back(std::move(by_input_part[p]));
             }
         }
         errno = 0;

@@ -1,8 +1,10 @@
 // Internal to io/: writes a denoise output whose input is a multi-part EXR, with
 // OpenEXR's C++ library, in the input's structure: the same parts in the same
-// order, each with its own header copied (name, channels, pixel types,
-// compression, every attribute), tiled parts written as scanline parts. Each
-// added channel goes into the part of the layer it belongs to. Rows are written
+// order, each with its own header copied (name, every attribute) and the
+// channels the output keeps of it (in their output types), compressed as the
+// output layout says, tiled parts written as scanline parts; a part left with
+// no channel (--only-denoised) is left out. Each added channel goes into the
+// part of the layer it belongs to. Rows are written
 // band after band into every part at once (a multi-part file may interleave its
 // parts' chunks; OpenEXR's Core API writes one part after another, so it cannot
 // be used here).
@@ -19,6 +21,7 @@
 namespace modestack::io::detail {
 
 struct OpenFrame;
+struct OutputLayout;
 
 /// Where an added channel goes in a multi-part output: the part of the longest
 /// layer of `source` whose name (as presented, see open_frame.h) starts the
@@ -35,19 +38,18 @@ AddedChannelPlace added_channel_place(const OpenFrame& source, const std::string
 class MultiPartWriter {
 public:
     /// A writer for `path` (reported as `reported_path`) that copies the parts of
-    /// `source`'s file and adds `extra_channels` (of type `extra_type`) and
-    /// `attributes` (to every part). Throws Error when the file cannot be created.
+    /// `source`'s file with the channels of `layout` (the added ones in their
+    /// layer's part) and adds `attributes` (to every part). Throws Error when the
+    /// file cannot be created.
     MultiPartWriter(const std::string& path, const std::string& reported_path, const OpenFrame& source,
-                    const std::vector<std::string>& extra_channels, OIIO::TypeDesc extra_type,
-                    const std::vector<HeaderAttribute>& attributes);
+                    const OutputLayout& layout, const std::vector<HeaderAttribute>& attributes);
     ~MultiPartWriter();
     MultiPartWriter(const MultiPartWriter&) = delete;
     MultiPartWriter& operator=(const MultiPartWriter&) = delete;
 
     /// Writes rows [row_begin, row_end) (0 = the data window's first row), in
     /// increasing order with no gaps, of every part. `pixels` holds them as
-    /// FrameOutput lays them out: the source's native pixel (every part's
-    /// channels, see OpenFrame) followed by the extra channels.
+    /// the layout given to the constructor says.
     void write_rows(int row_begin, int row_end, const unsigned char* pixels);
     /// Writes the chunk tables and closes the file. Throws Error on failure.
     void finish();

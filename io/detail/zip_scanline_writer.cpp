@@ -3,6 +3,7 @@
 #include "core/common/error.h"
 #include "io/detail/exr_core.h"
 #include "io/detail/open_frame.h"
+#include "io/detail/output_layout.h"
 
 #include <fmt/format.h>
 #include <libdeflate.h>
@@ -84,7 +85,7 @@ struct ZipScanlineWriter::State {
     int width = 0, height = 0;
     int first_y = 0;          ///< the data window's first row
     int lines_per_chunk = 1;  ///< 16 for ZIP, 1 for ZIPS
-    size_t pixel_bytes = 0;   ///< one interleaved input pixel
+    size_t pixel_bytes = 0;   ///< one interleaved output pixel
     struct Channel {
         size_t offset = 0;  ///< in an interleaved pixel
         size_t bytes = 0;
@@ -102,13 +103,17 @@ struct ZipScanlineWriter::State {
     }
 };
 
-std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& path, const std::string& reported_path,
-                                                           const OpenFrame& source,
-                                                           const std::vector<std::string>& extra_channels,
-                                                           const std::vector<HeaderAttribute>& attributes)
+std::unique_ptr<ZipScanlineWriter>
+ZipScanlineWriter::open(const std::string& path, const std::string& reported_path, const OpenFrame& source,
+                        const OutputLayout& layout, const std::vector<HeaderAttribute>& attributes)
 {
     const OIIO::ImageSpec& spec = source.spec;
-    if (source.selected.empty() || source.parts.size() != 1)
+    if (source.selected.empty() || source.parts.size() != 1 || layout.compressions.size() != 1)
+        return nullptr;
+    exr_compression_t compression = EXR_COMPRESSION_ZIP;
+    if (layout.compressions.front() == "zips")
+        compression = EXR_COMPRESSION_ZIPS;
+    else if (layout.compressions.front() != "zip")
         return nullptr;
 
     // Only what this writer can copy exactly (the OpenImageIO path reports what is wrong with the rest).
@@ -122,30 +127,43 @@ std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& pa
     const exr_attr_box2i_t& data_window = input_part.data_window;
     exr_context_initializer_t initializer = core_initializer();
 
-    // Where each channel sits in an interleaved pixel, by name.
-    std::map<std::string, State::Channel> places;
-    for (int c = 0; c < spec.nchannels; ++c)
-        places[spec.channelnames[c]] = {source.byte_offset[c], spec.channelformat(c).size()};
-    const OIIO::TypeDesc extra_type = spec.channelformat(source.selected.front());
-    exr_pixel_type_t extra_exr_type = EXR_PIXEL_HALF;
-    if (!exr_type_of(extra_type, extra_exr_type))
+    // Each output channel: where it sits in an interleaved pixel, by name, its
+    // type, and the input's perceptual treatment of it (added ones: as before).
+    struct Written {
+        State::Channel place;
+        exr_pixel_type_t type = EXR_PIXEL_HALF;
+        exr_perceptual_treatment_t treatment = EXR_PERCEPTUALLY_LOGARITHMIC;
+    };
+    std::map<std::string, Written> places;
+    std::vector<std::string> order; // the layout's
+    for (const OutputChannel& channel : layout.channels) {
+        Written written{{channel.offset, channel.type.size()}, EXR_PIXEL_HALF, EXR_PERCEPTUALLY_LOGARITHMIC};
+        if (!exr_type_of(channel.type, written.type) || !places.emplace(channel.name, written).second)
+            return nullptr;
+        order.push_back(channel.name);
+    }
+    size_t kept_inputs = 0;
+    for (int c = 0; c < input_channels->num_channels; ++c) {
+        const auto found = places.find(input_channels->entries[c].name.str);
+        if (found != places.end()) {
+            found->second.treatment =
+                static_cast<exr_perceptual_treatment_t>(input_channels->entries[c].p_linear);
+            ++kept_inputs;
+        }
+    }
+    size_t layout_inputs = 0; // every kept input channel must be found in the file under its name
+    for (const OutputChannel& channel : layout.channels)
+        layout_inputs += channel.input_channel >= 0;
+    if (kept_inputs != layout_inputs)
         return nullptr;
-    for (size_t k = 0; k < extra_channels.size(); ++k)
-        if (!places.emplace(extra_channels[k], State::Channel{source.native_pixel_bytes + k * extra_type.size(),
-                                                              extra_type.size()})
-                 .second)
-            return nullptr;
-    for (int c = 0; c < input_channels->num_channels; ++c)
-        if (!places.count(input_channels->entries[c].name.str))
-            return nullptr;
 
     auto state = std::make_unique<State>();
     state->reported_path = reported_path;
     state->width = spec.width;
     state->height = spec.height;
     state->first_y = data_window.min.y;
-    state->lines_per_chunk = input_part.lines_per_chunk();
-    state->pixel_bytes = source.native_pixel_bytes + extra_channels.size() * extra_type.size();
+    state->lines_per_chunk = compression == EXR_COMPRESSION_ZIP ? 16 : 1;
+    state->pixel_bytes = layout.pixel_bytes;
 
     // A header this writer cannot build (an attribute OpenEXR's Core refuses) is
     // left to OpenImageIO too: the temporary file is removed and nullptr returned.
@@ -156,15 +174,12 @@ std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& pa
     // Long attribute and channel names (Cycles writes some) as the input has them.
     bool ok = exr_set_longname_support(output, 1) == EXR_ERR_SUCCESS &&
               exr_add_part(output, nullptr, EXR_STORAGE_SCANLINE, &part) == EXR_ERR_SUCCESS;
-    for (int c = 0; ok && c < input_channels->num_channels; ++c) {
-        const exr_attr_chlist_entry_t& channel = input_channels->entries[c];
-        ok = exr_add_channel(output, part, channel.name.str, channel.pixel_type,
-                             static_cast<exr_perceptual_treatment_t>(channel.p_linear), 1, 1) == EXR_ERR_SUCCESS;
+    for (size_t k = 0; ok && k < order.size(); ++k) {
+        const Written& channel = places.at(order[k]);
+        ok = exr_add_channel(output, part, order[k].c_str(), channel.type, channel.treatment, 1, 1) ==
+             EXR_ERR_SUCCESS;
     }
-    for (size_t k = 0; ok && k < extra_channels.size(); ++k)
-        ok = exr_add_channel(output, part, extra_channels[k].c_str(), extra_exr_type, EXR_PERCEPTUALLY_LOGARITHMIC,
-                             1, 1) == EXR_ERR_SUCCESS;
-    ok = ok && exr_set_compression(output, part, input_part.compression) == EXR_ERR_SUCCESS &&
+    ok = ok && exr_set_compression(output, part, compression) == EXR_ERR_SUCCESS &&
          exr_set_data_window(output, part, &data_window) == EXR_ERR_SUCCESS &&
          exr_set_display_window(output, part, &display_window) == EXR_ERR_SUCCESS &&
          exr_set_lineorder(output, part, EXR_LINEORDER_INCREASING_Y) == EXR_ERR_SUCCESS;
@@ -197,7 +212,7 @@ std::unique_ptr<ZipScanlineWriter> ZipScanlineWriter::open(const std::string& pa
     const exr_attr_chlist_t* output_channels = nullptr;
     exr_get_channels(output, part, &output_channels);
     for (int c = 0; c < output_channels->num_channels; ++c) {
-        const State::Channel& place = places.at(output_channels->entries[c].name.str);
+        const State::Channel& place = places.at(output_channels->entries[c].name.str).place;
         state->channels.push_back(place);
         state->row_bytes += place.bytes * static_cast<size_t>(state->width);
     }

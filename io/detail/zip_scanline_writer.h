@@ -15,27 +15,28 @@
 namespace modestack::io::detail {
 
 struct OpenFrame;
+struct OutputLayout;
 
 class ZipScanlineWriter {
 public:
     /// A writer for `path` that copies the header of `source`'s file (every
-    /// channel and attribute; line order becomes increasing y) and appends
-    /// `extra_channels` in the pixel type of `source`'s first selected channel,
-    /// then `attributes`. nullptr when the source is not a single-part ZIP/ZIPS
-    /// scanline file or when OpenEXR's Core cannot build the header: the caller
-    /// then writes with OpenImageIO. Throws Error when the header cannot be written.
+    /// attribute; line order becomes increasing y) with the channels of
+    /// `layout` (the input's it keeps, in their types, then the added ones),
+    /// compressed as `layout` says (zip or zips), then `attributes`. nullptr
+    /// when the source is not a single-part ZIP/ZIPS scanline file, the
+    /// compression is not ZIP/ZIPS, or OpenEXR's Core cannot build the header:
+    /// the caller then writes with OpenImageIO. Throws Error when the header
+    /// cannot be written.
     static std::unique_ptr<ZipScanlineWriter> open(const std::string& path, const std::string& reported_path,
-                                                   const OpenFrame& source,
-                                                   const std::vector<std::string>& extra_channels,
+                                                   const OpenFrame& source, const OutputLayout& layout,
                                                    const std::vector<HeaderAttribute>& attributes);
     ~ZipScanlineWriter();
     ZipScanlineWriter(const ZipScanlineWriter&) = delete;
     ZipScanlineWriter& operator=(const ZipScanlineWriter&) = delete;
 
     /// Writes rows [row_begin, row_end) (0 = the data window's first row), in
-    /// increasing order with no gaps. `pixels` holds them interleaved as OIIO
-    /// lays out the source's channels followed by the extra channels, in native
-    /// types. Throws Error on a failed write.
+    /// increasing order with no gaps. `pixels` holds them interleaved as the
+    /// layout given to open() says. Throws Error on a failed write.
     void write_rows(int row_begin, int row_end, const unsigned char* pixels);
     /// Writes the chunk table and closes the file. Throws Error on failure.
     void finish();

@@ -6,7 +6,10 @@
 // Arnold-style shot (the same light, multiplied by its colour, under Arnold's
 // names) keeps RGBA = Σ of its light AOVs; a light counted twice or a renderer
 // whose beauty is unknown leaves the beauty alone and the JSON says why; threads,
-// streaming and farm stages give the same bits; and a Cycles shot, if present.
+// streaming and farm stages give the same bits; two chained single-layer runs
+// (DiffInd, then DiffDir on the first's output) keep the beauty the composite
+// of its AOVs and combine its sigma in quadrature in its one set of channels;
+// and a Cycles shot, if present.
 #include "tests/tools/testkit.h"
 
 #include <OpenImageIO/imageio.h>
@@ -65,19 +68,22 @@ bool within_half(double a, double b, double scale)
 }
 
 // Every pixel of every frame: beauty == Σ colour × layer of the file's own channels, to half precision
-// of the values involved: the terms, and the input's beauty (`input_base`, "" = none) the
-// update started from, whose rounding it keeps (a firefly's beauty of 1.0 rounds by 2^-11).
-// `terms` are (colour layer or "", light layer).
+// of the values involved: the terms, and the input beauties (`input_bases`: the render, the
+// outputs of earlier runs) the updates started from, whose rounding each keeps (a firefly's
+// beauty of 1.0 rounds by 2^-11). `terms` are (colour layer or "", light layer).
 void check_composite(const std::string& base, const std::string& beauty,
                      const std::vector<std::pair<std::string, std::string>>& terms,
-                     const std::string& input_base = "")
+                     const std::vector<std::string>& input_bases = {})
 {
     for (int frame = 1; frame <= kFrames; ++frame) {
         const std::string file = frame_file(base, frame);
         const std::vector<float> beauty_values = rgb(file, beauty);
         std::vector<float> input_scale(beauty_values.size(), 0.0f);
-        if (!input_base.empty())
-            input_scale = rgb(frame_file(input_base, frame), beauty);
+        for (const std::string& input_base : input_bases) {
+            const std::vector<float> input = rgb(frame_file(input_base, frame), beauty);
+            for (size_t i = 0; i < input.size(); ++i)
+                input_scale[i] = std::max(input_scale[i], std::abs(input[i]));
+        }
         std::vector<double> sum(beauty_values.size(), 0.0), scale(beauty_values.size(), 0.0);
         for (const auto& [colour, layer] : terms) {
             const std::vector<float> light = rgb(file, layer);
@@ -234,7 +240,7 @@ TEST_CASE("denoise --layer DiffInd keeps the beauty Combined = DiffCol x (DiffDi
     CHECK(on["beauty"]["formula"] == "Combined += DiffCol * (denoised - noisy DiffInd)");
     CHECK(on["beauty"]["sigma"]["channels"] ==
           nlohmann::json::array({"Combined.sigma.R", "Combined.sigma.G", "Combined.sigma.B"}));
-    check_composite(dir.file("on/d"), "Combined", terms, dir.file("own"));
+    check_composite(dir.file("on/d"), "Combined", terms, {dir.file("own")});
 
     size_t changed = 0;
     for (int frame = 1; frame <= kFrames; ++frame) {
@@ -273,6 +279,64 @@ TEST_CASE("denoise --layer DiffInd keeps the beauty Combined = DiffCol x (DiffDi
         run_modestack(fmt::format("denoise {} --layer DiffInd --update-beauty --no-update-beauty -q -o {}",
                                   input, dir.file("both/d.####.exr")));
     CHECK(both.exit_code == 2);
+}
+
+TEST_CASE("denoise --update-beauty chained: a denoise output denoised again for another layer keeps the "
+          "beauty the composite of its AOVs, its sigma the quadrature of both layers' terms")
+{
+    TempDir dir;
+    const std::string input = render_own_shot(dir);
+    run_ok(fmt::format("denoise {} --layer DiffInd -q -o {}", input, dir.file("first/d.####.exr")));
+    run_ok(fmt::format("denoise {} --layer DiffDir -q -o {} --json {}", dir.file("first/d.####.exr"),
+                       dir.file("second/d.####.exr"), dir.file("second.json")));
+    const nlohmann::json second = load_json(dir.file("second.json"));
+    CHECK(second["beauty"]["updated"] == true);
+    CHECK(second["beauty"]["formula"] == "Combined += DiffCol * (denoised - noisy DiffDir)");
+    CHECK(second["beauty"]["sigma"]["rewritten"] == true);
+    CHECK(second["beauty"]["sigma"]["channels"] ==
+          nlohmann::json::array({"Combined.sigma.R", "Combined.sigma.G", "Combined.sigma.B"}));
+    CHECK(second["beauty"]["sigma"]["formula"] ==
+          "sqrt(Combined.sigma (input)^2 + DiffCol^2 * DiffDir.sigma^2)");
+    check_composite(dir.file("second/d"), "Combined",
+                    {{"DiffCol", "DiffDir"}, {"DiffCol", "DiffInd"}, {"", "Emit"}},
+                    {dir.file("own"), dir.file("first/d")});
+
+    size_t moved = 0;
+    for (int frame = 1; frame <= kFrames; ++frame) {
+        const std::string first = frame_file(dir.file("first/d"), frame),
+                          out = frame_file(dir.file("second/d"), frame);
+        CAPTURE(out);
+        // One set of the beauty's sigma channels, every name once.
+        std::vector<std::string> names = testkit::read_channel_names(out);
+        CHECK(std::count(names.begin(), names.end(), "Combined.sigma.R") == 1);
+        CHECK(std::count_if(names.begin(), names.end(), [](const std::string& name) {
+                  return name.find("sigma") != std::string::npos;
+              }) == 9);
+        std::sort(names.begin(), names.end());
+        CHECK(std::adjacent_find(names.begin(), names.end()) == names.end());
+        // sigma = sqrt((DiffCol σ_DiffInd)² + (DiffCol σ_DiffDir)²), the first run's term kept.
+        const std::vector<float> sigma = rgb(out, "Combined.sigma"), colour = rgb(out, "DiffCol"),
+                                 indirect = rgb(out, "DiffInd.sigma"), direct = rgb(out, "DiffDir.sigma"),
+                                 before = rgb(first, "Combined.sigma");
+        size_t off = 0;
+        for (size_t i = 0; i < sigma.size(); ++i) {
+            const double expected = std::hypot(static_cast<double>(colour[i]) * indirect[i],
+                                               static_cast<double>(colour[i]) * direct[i]);
+            off += !within_half(sigma[i], expected, std::max(expected, static_cast<double>(sigma[i])));
+            moved += sigma[i] != before[i];
+        }
+        CHECK(off == 0);
+    }
+    CHECK(moved > 0); // the second run's term is in: the check above is not the first run's sigma
+
+    // --only-denoised keeps the rewritten beauty sigma, once.
+    run_ok(fmt::format("denoise {} --layer DiffDir --only-denoised -q -o {}", dir.file("first/d.####.exr"),
+                       dir.file("only/d.####.exr")));
+    const std::vector<std::string> only = testkit::read_channel_names(frame_file(dir.file("only/d"), 2));
+    CHECK(std::count(only.begin(), only.end(), "Combined.sigma.G") == 1);
+    CHECK(std::count(only.begin(), only.end(), "DiffInd.sigma.G") == 0);
+    CHECK(same_bits(rgb(frame_file(dir.file("only/d"), 2), "Combined.sigma"),
+                    rgb(frame_file(dir.file("second/d"), 2), "Combined.sigma")));
 }
 
 TEST_CASE("denoise --update-beauty: threads, a streamed run and farm stages write the same bits")
@@ -335,7 +399,7 @@ TEST_CASE("denoise --update-beauty on an Arnold-style shot: RGBA = the sum of it
     CHECK(on["beauty"]["layer"] == "");
     CHECK(on["beauty"]["formula"] == "the unnamed R, G, B += (denoised - noisy diffuse_indirect)");
     CHECK(on["beauty"]["sigma"]["channels"] == nlohmann::json::array({"sigma.R", "sigma.G", "sigma.B"}));
-    check_composite(dir.file("on/d"), "", terms, dir.file("arnold"));
+    check_composite(dir.file("on/d"), "", terms, {dir.file("arnold")});
     CHECK(!same_bits(rgb(frame_file(dir.file("arnold"), 2), ""), rgb(frame_file(dir.file("on/d"), 2), "")));
 
     // The combined `diffuse` holds diffuse_indirect's light too: denoised together, the beauty would count it
@@ -438,9 +502,9 @@ TEST_CASE("denoise --update-beauty on a V-Ray-style raw layer: the beauty and th
     CHECK(on["beauty"]["products"][0]["layer"] == "VRayGlobalIllumination");
     check_composite(dir.file("on/d"), "",
                     {{"", "VRayLighting"}, {"", "VRayGlobalIllumination"}, {"", "VRaySelfIllumination"}},
-                    dir.file("vray"));
+                    {dir.file("vray")});
     check_composite(dir.file("on/d"), "VRayGlobalIllumination",
-                    {{"VRayDiffuseFilter", "VRayRawGlobalIllumination"}}, dir.file("vray"));
+                    {{"VRayDiffuseFilter", "VRayRawGlobalIllumination"}}, {dir.file("vray")});
     CHECK(!same_bits(rgb(frame_file(dir.file("vray"), 2), "VRayGlobalIllumination"),
                      rgb(frame_file(dir.file("on/d"), 2), "VRayGlobalIllumination")));
     // The raw layer and its product denoised together would count that light twice.
@@ -448,4 +512,30 @@ TEST_CASE("denoise --update-beauty on a V-Ray-style raw layer: the beauty and th
         "denoise {} --layer VRayRawGlobalIllumination --layer VRayGlobalIllumination -q -o {} --json {}",
         dir.file("vray.####.exr"), dir.file("twice/d.####.exr"), dir.file("twice.json")));
     CHECK(load_json(dir.file("twice.json"))["beauty"]["updated"] == false);
+}
+
+TEST_CASE(
+    "denoise --update-beauty finds Arnold's beauty under its alias RGBA, as a multi-part file names its part")
+{
+    TempDir dir;
+    render_own_shot(dir);
+    write_styled_shot(dir, "arnold_parts",
+                      {{"RGBA", {"R", "G", "B", "A"}, beauty_of},
+                       {"diffuse_albedo", kRgb, albedo},
+                       {"diffuse_direct", kRgb, direct},
+                       {"diffuse_indirect", kRgb, indirect},
+                       {"emission", kRgb, emission}},
+                      {"arnold/version", "Arnold 7.2.1.0"});
+    const std::vector<std::pair<std::string, std::string>> terms{
+        {"", "diffuse_direct"}, {"", "diffuse_indirect"}, {"", "emission"}};
+    check_composite(dir.file("arnold_parts"), "RGBA", terms);
+    run_ok(fmt::format("denoise {} --layer diffuse_indirect -q -o {} --json {}",
+                       dir.file("arnold_parts.####.exr"), dir.file("on/d.####.exr"), dir.file("on.json")));
+    const nlohmann::json on = load_json(dir.file("on.json"));
+    CHECK(on["renderer"]["name"] == "arnold");
+    CHECK(on["beauty"]["updated"] == true);
+    CHECK(on["beauty"]["layer"] == "RGBA");
+    CHECK(on["beauty"]["sigma"]["channels"] ==
+          nlohmann::json::array({"RGBA.sigma.R", "RGBA.sigma.G", "RGBA.sigma.B"}));
+    check_composite(dir.file("on/d"), "RGBA", terms, {dir.file("arnold_parts")});
 }

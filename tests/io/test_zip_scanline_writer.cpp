@@ -1,7 +1,9 @@
 // ZIP and ZIPS outputs are written with libdeflate (io/detail/zip_scanline_writer.h):
 // the files must hold exactly what OpenImageIO's writer would write (every
 // channel's bits, the header), whatever the channel types, data window or height,
-// and stay readable by OpenEXR where a chunk does not compress.
+// the output format (only the written channels, float, ZIPS from ZIP), and stay
+// readable by OpenEXR where a chunk does not compress; any other compression
+// asked for is OpenImageIO's to write.
 #include "io/frame_output.h"
 #include "io/sequence.h"
 #include "io/sequence_reader.h"
@@ -51,15 +53,17 @@ void write_offset_frame(const std::string& path, int width, int height, const st
 
 // Writes frame 0 of `reader` to `path` with the selected channels replaced and
 // sigma channels appended, in bands of `band_rows`, through the ZIP writer or
-// (with `through_openimageio`) through OpenImageIO.
-void write_output(const std::string& path, io::SequenceReader& reader, int band_rows, bool through_openimageio)
+// (with `through_openimageio`) through OpenImageIO, as `format` says.
+void write_output(const std::string& path, io::SequenceReader& reader, int band_rows,
+                  bool through_openimageio, const io::OutputFormat& format = {})
 {
     const std::vector<std::string> extra{"sigma.R", "sigma.G", "sigma.B"};
     io::FrameOutput output(path, reader, 0, extra,
                            {io::HeaderAttribute::of_text("modestack:command", "modestack test"),
                             io::HeaderAttribute::of_integer("modestack:rank", 3),
                             io::HeaderAttribute::of_real("modestack:seconds", 1.5)},
-                           through_openimageio ? io::ExrCodec::OpenImageIO : io::ExrCodec::Libdeflate);
+                           through_openimageio ? io::ExrCodec::OpenImageIO : io::ExrCodec::Libdeflate,
+                           io::PartLayout::AsInput, format);
     const int width = reader.width(), height = reader.height();
     const int selected = reader.selected_channel_count();
     std::vector<unsigned char> native;
@@ -67,6 +71,8 @@ void write_output(const std::string& path, io::SequenceReader& reader, int band_
         const int end = std::min(height, row + band_rows);
         const size_t pixels = static_cast<size_t>(width) * (end - row);
         reader.read_native(0, row, end, native);
+        if (!output.needs_input_rows())
+            native.clear();
         std::vector<float> replaced(pixels * selected), sigma(pixels * 3);
         for (size_t i = 0; i < replaced.size(); ++i)
             replaced[i] = 0.25f + 0.001f * static_cast<float>(i % 977) + static_cast<float>(row);
@@ -101,13 +107,13 @@ std::string header_of(const std::string& path)
 // Both writers, the same content: same pixel bits and header, different
 // compressed bytes (the ZIP writer really ran).
 void check_same_as_openimageio(const std::string& input_pattern, const std::vector<std::string>& layers,
-                               int band_rows)
+                               int band_rows, const io::OutputFormat& format = {})
 {
     TempDir out;
     io::SequenceReader reader(io::find_input_sequence(input_pattern), layers);
     const std::string ours = out.file("ours.exr"), theirs = out.file("theirs.exr");
-    write_output(ours, reader, band_rows, false);
-    write_output(theirs, reader, band_rows, true);
+    write_output(ours, reader, band_rows, false, format);
+    write_output(theirs, reader, band_rows, true, format);
     CHECK(testkit::read_native(ours) == testkit::read_native(theirs));
     CHECK(header_of(ours) == header_of(theirs));
     CHECK(file_bytes(ours) != file_bytes(theirs));
@@ -149,6 +155,47 @@ TEST_CASE("ZIP writer: a data window off the origin and float outputs are writte
         write_offset_frame(dir.file(fmt::format("offset.{:04d}.exr", frame)), 21, 19, "zip");
     check_same_as_openimageio(dir.file("offset.####.exr"), {"depth"}, 16);
     check_same_as_openimageio(dir.file("offset.####.exr"), {}, 5);
+}
+
+TEST_CASE(
+    "ZIP writer: only the written channels, float ones, ZIPS from ZIP are written as OpenImageIO writes "
+    "them, and PIZ asked for goes through OpenImageIO")
+{
+    TempDir dir;
+    testkit::ExrLayout layout;
+    layout.width = 23;
+    layout.height = 35;
+    layout.channel_names = {"R", "G", "B", "A", "diffuse.R", "diffuse.G", "diffuse.B", "Z"};
+    layout.channel_types = {"half", "half", "half", "half", "half", "half", "half", "float"};
+    testkit::write_sequence(dir.file("shot.%04d.exr"), {1, 2, 3}, layout, [](int frame, int x, int y, int c) {
+        return std::cos(0.3f * x - 0.7f * y + c + frame) * 4;
+    });
+    const std::string shot = dir.file("shot.####.exr");
+    io::OutputFormat only_float;
+    only_float.only_written = true;
+    only_float.written_type = io::WrittenType::Float;
+    io::OutputFormat beauty_kept = only_float; // the bare R, G, B, A kept whole, as --update-beauty's beauty
+    beauty_kept.kept_layers = {""};
+    io::OutputFormat zips;
+    zips.compression = "zips";
+    for (const io::OutputFormat* format : {&only_float, &beauty_kept, &zips}) {
+        check_same_as_openimageio(shot, {"diffuse"}, 9, *format);
+        TempDir out;
+        io::SequenceReader reader(io::find_input_sequence(shot), {"diffuse"});
+        write_output(out.file("ours.exr"), reader, 9, false, *format);
+        const std::vector<std::string> names = testkit::read_channel_names(out.file("ours.exr"));
+        CHECK(names.size() == (format == &only_float ? 6u : format == &beauty_kept ? 10u : 11u));
+        CHECK(testkit::read_string_attribute(out.file("ours.exr"), "compression") ==
+              (format == &zips ? "zips" : "zip"));
+    }
+    io::OutputFormat piz;
+    piz.compression = "piz";
+    TempDir out;
+    io::SequenceReader reader(io::find_input_sequence(shot), {"diffuse"});
+    write_output(out.file("ours.exr"), reader, 9, false, piz);
+    write_output(out.file("theirs.exr"), reader, 9, true, piz);
+    CHECK(testkit::read_string_attribute(out.file("ours.exr"), "compression") == "piz");
+    CHECK(file_bytes(out.file("ours.exr")) == file_bytes(out.file("theirs.exr")));
 }
 
 TEST_CASE("ZIP writer: a chunk that does not compress is stored as it is and reads back exactly")
