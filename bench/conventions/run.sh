@@ -32,6 +32,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 repo=$(cd "$here/../.." && pwd)
 python=/usr/bin/python3
 source "$repo/bench/common.sh"
+bench_require_packages python3-numpy python3-openimageio
 machine=$(bench_machine)
 styles=(modestack cycles cycles-header arnold arnold-multipart renderman karma karma-multipart vray redshift
     redshift-multipart)

@@ -32,6 +32,7 @@ if [ "${1:-}" = --chained ]; then
 fi
 
 source "$here/../common.sh"
+bench_require_packages python3-numpy python3-openimageio time
 modestack=${1:?usage: run.sh MODESTACK [WORK]}
 work=${2:-/tmp/modestack-layers}
 cycles=${CYCLES_DIR:-$here/../../../shared/cycles}
