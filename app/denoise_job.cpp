@@ -406,7 +406,9 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
 
     const RendererChoice renderer =
         choose_renderer(*job.conventions, job.renderer, io::read_frame_header(input.files.front()));
-    SequenceSource source(reader, auxiliary_candidates(renderer, reader.layers()));
+    SequenceSource source(reader, auxiliary_candidates(renderer, reader.layers()),
+                          job.joint ? std::vector<std::vector<std::vector<std::string>>>{}
+                                    : layer_variance_candidates(renderer, reader.layers()));
     // --max-memory bounds the whole process: the engine gets what the program and
     // open files leave. The mode filter's guide layers are opened now so that
     // what they hold is counted too.
@@ -445,8 +447,16 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
         settings.report_modes = report::kReportModes;
         collector.emplace(stream.source(), stream.sink(), report::collector_options(reader.frame_count()));
     }
+    VarianceNames variance_names{
+        job.input, describe_candidates(source.auxiliary_candidates(denoise::Auxiliary::Variance)), {}, {}};
+    for (size_t i = 0; i < reader.layers().size(); ++i) {
+        variance_names.layers.push_back(reader.layers()[i].name);
+        if (!job.joint)
+            variance_names.layer_shots.push_back(
+                describe_candidates(source.layer_variance_candidates(static_cast<int>(i))));
+    }
     TransformStream transformed(job.transform, collector ? collector->source() : stream.source(),
-                                collector ? collector->sink() : stream.sink(), settings, job.input,
+                                collector ? collector->sink() : stream.sink(), settings, variance_names,
                                 job.method_options);
     DenoiseResult result;
     result.report =
@@ -493,8 +503,11 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
     result.height = report.shape.height;
     result.channel_names = reader.selected_channel_names();
     for (const auto& layer : reader.layers())
-        result.layers.push_back({layer.name, layer.channel_names, layer.sigma_names});
+        result.layers.push_back({layer.name, layer.channel_names, layer.sigma_names, nullptr});
     result.joint = settings.layer_channels.size() < 2;
+    if (!result.joint) // one part per layer, in order
+        for (size_t i = 0; i < result.layers.size() && i < transformed.whitening().size(); ++i)
+            result.layers[i].whiten = whitened_part_json(transformed.whitening()[i]);
     result.renderer = renderer_json(renderer, source.auxiliary_lookups());
     result.beauty = beauty_json(beauty);
     result.rank_map = job.rank_map;
