@@ -23,6 +23,7 @@
 #include "io/text_output.h"
 
 #include <fmt/format.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -328,7 +329,9 @@ DenoiseJob make_denoise_job(const DenoiseCommandOptions& options, const CLI::App
     return job;
 }
 
-DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_options)
+namespace {
+
+DenoiseResult denoise_in_arena(const DenoiseJob& job, const CommonOptions& context_options)
 {
     auto start = std::chrono::steady_clock::now();
     denoise::Settings settings = job.settings;
@@ -525,6 +528,21 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
     result.writes_frames = writes_frames;
     result.output_in_memory = output_in_memory;
     return result;
+}
+
+} // namespace
+
+DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_options)
+{
+    // The engine's tasks run in an arena of their own, which gives every task the
+    // floating-point settings of this thread (oneTBB captures them when the arena
+    // is made). `run` renders in this process first, and a TBB worker came out
+    // of the render with denormals-are-zero and flush-to-zero set (Embree's:
+    // modestack sets neither); that worker decoded the half subnormals of the
+    // frames it read (DiffDir's darkest pixels) as 0, so the files depended on
+    // which thread read which frame, not only on the input.
+    tbb::task_arena arena;
+    return arena.execute([&] { return denoise_in_arena(job, context_options); });
 }
 
 }  // namespace modestack::app
