@@ -1,6 +1,6 @@
 // `modestack run`: the main job end to end (issue 6, README command one).
-// Renders the noisy pass of a built-in scene, denoises its direct and then its
-// indirect layer (each on its own modes, auto rank), refines the unsure
+// Renders the noisy pass of a built-in scene, denoises its indirect and its
+// direct layer in one run (each on its own modes, auto rank), refines the unsure
 // indirect pixels at high spp, composites the final beauty
 // = DiffCol × (DiffDir + DiffInd) + Emit ([0017]) and writes a summary and a
 // contact sheet. Each stage is the library call behind the subcommand a user
@@ -110,8 +110,7 @@ int run_run(const RunOptions& options)
     if (directory_error)
         throw bad_input(options.directory,
                         fmt::format("cannot create output directory ({})", directory_error.message()));
-    const std::string noisy = sequence_path(options, "noisy"), direct = sequence_path(options, "direct"),
-                      denoised = sequence_path(options, "denoised"),
+    const std::string noisy = sequence_path(options, "noisy"), denoised = sequence_path(options, "denoised"),
                       refined = sequence_path(options, "refined"),
                       final_path = sequence_path(options, "final"), masks = sequence_path(options, "masks"),
                       reference = sequence_path(options, "reference");
@@ -127,24 +126,20 @@ int run_run(const RunOptions& options)
     stage_start = std::chrono::steady_clock::now();
     // The renderer writes scene-linear Rec.709, which the denoiser reads as such.
     const std::string report_path = (directory / "report.html").string();
-    // The direct light first, on its own modes: left at 4 spp it kept the final
-    // beauty's shadows noisy; the per-pixel estimator choice keeps it no worse
-    // than its input where its shadows move. The indirect stage then reads that
-    // sequence (its DiffInd is the noisy one, bit for bit).
-    auto layer_stage = [&](const std::string& input, const std::string& layer, const std::string& output) {
-        DenoiseCommandOptions stage;
-        stage.input = input;
-        stage.frames = frame_range;
-        stage.layers = {layer};
-        stage.output = output;
-        stage.ocio_config = color_config.path();
-        stage.no_update_beauty = true; // run composites the final beauty from the passes itself
-        return stage;
-    };
-    const DenoiseResult direct_result =
-        denoise(make_denoise_job(layer_stage(noisy, "DiffDir", direct), nullptr), options.common);
-    write_json(json_file("denoise_direct.json"), denoise_json(direct_result));
-    DenoiseCommandOptions denoise_options = layer_stage(direct, "DiffInd", denoised);
+    // The indirect and the direct light, each on its own modes (the direct
+    // light left at 4 spp kept the final beauty's shadows noisy; the per-pixel
+    // estimator choice keeps it no worse than its input where its shadows
+    // move), in one run: the shot is read and written once. DiffInd is
+    // whitened by its DiffIndVar and DiffDir, which has no variance layer, is
+    // not, so the files have the bits of the two layers denoised one after the
+    // other. DiffInd first: the report page and the summary's rank are its.
+    DenoiseCommandOptions denoise_options;
+    denoise_options.input = noisy;
+    denoise_options.frames = frame_range;
+    denoise_options.layers = {"DiffInd", "DiffDir"};
+    denoise_options.output = denoised;
+    denoise_options.ocio_config = color_config.path();
+    denoise_options.no_update_beauty = true; // run composites the final beauty from the passes itself
     denoise_options.report_path = report_path;
     // The stage writes its page already; run completes it below (with refine and the reference).
     DenoiseResult denoise_result = denoise(make_denoise_job(denoise_options, nullptr), options.common);
@@ -204,7 +199,7 @@ int run_run(const RunOptions& options)
     summary["refine_spp"] = options.refine_spp;
     summary["rank"] = kept_modes;
     summary["rank_rule"] = denoise_result.report.rank_decision.rule;
-    summary["direct_rank"] = direct_result.report.rank_decision.kept_modes;
+    summary["direct_rank"] = denoise_result.report.layers.at(1).rank_decision.kept_modes;
     const bool by_budget = refine_result.budget_percent >= 0;
     summary["refine_selection"] = by_budget ? "budget" : "threshold";
     summary["refine_budget_percent"] = by_budget ? Json(refine_result.budget_percent) : Json();
@@ -213,7 +208,6 @@ int run_run(const RunOptions& options)
     summary["percent_pixels_refined"] = refine_result.percent_rendered;
     summary["seconds"] = seconds;
     summary["outputs"] = {{"noisy", noisy},
-                          {"direct", direct},
                           {"denoised", denoised},
                           {"refined", refined},
                           {"final", final_path},
@@ -271,7 +265,8 @@ Subcommand add_run_command(CLI::App& parent)
     auto options = std::make_shared<RunOptions>();
     CLI::App* command = parent.add_subcommand(
         "run",
-        "The main job: render the noisy pass, denoise its indirect light, refine, composite, summarize");
+        "The main job: render the noisy pass, denoise its indirect and direct light, refine, composite, "
+        "summarize");
     command->add_option("--scene", options->scene, "Built-in scene (see render --scene list)");
     command->add_option("-o,--output", options->directory,
                         "Output directory: noisy/, denoised/, refined/, final/, masks/, summary.json, "

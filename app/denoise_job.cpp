@@ -23,6 +23,7 @@
 #include "io/text_output.h"
 
 #include <fmt/format.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <chrono>
@@ -328,7 +329,9 @@ DenoiseJob make_denoise_job(const DenoiseCommandOptions& options, const CLI::App
     return job;
 }
 
-DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_options)
+namespace {
+
+DenoiseResult denoise_in_arena(const DenoiseJob& job, const CommonOptions& context_options)
 {
     auto start = std::chrono::steady_clock::now();
     denoise::Settings settings = job.settings;
@@ -406,7 +409,9 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
 
     const RendererChoice renderer =
         choose_renderer(*job.conventions, job.renderer, io::read_frame_header(input.files.front()));
-    SequenceSource source(reader, auxiliary_candidates(renderer, reader.layers()));
+    SequenceSource source(reader, auxiliary_candidates(renderer, reader.layers()),
+                          job.joint ? std::vector<std::vector<std::vector<std::string>>>{}
+                                    : layer_variance_candidates(renderer, reader.layers()));
     // --max-memory bounds the whole process: the engine gets what the program and
     // open files leave. The mode filter's guide layers are opened now so that
     // what they hold is counted too.
@@ -445,8 +450,16 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
         settings.report_modes = report::kReportModes;
         collector.emplace(stream.source(), stream.sink(), report::collector_options(reader.frame_count()));
     }
+    VarianceNames variance_names{
+        job.input, describe_candidates(source.auxiliary_candidates(denoise::Auxiliary::Variance)), {}, {}};
+    for (size_t i = 0; i < reader.layers().size(); ++i) {
+        variance_names.layers.push_back(reader.layers()[i].name);
+        if (!job.joint)
+            variance_names.layer_shots.push_back(
+                describe_candidates(source.layer_variance_candidates(static_cast<int>(i))));
+    }
     TransformStream transformed(job.transform, collector ? collector->source() : stream.source(),
-                                collector ? collector->sink() : stream.sink(), settings, job.input,
+                                collector ? collector->sink() : stream.sink(), settings, variance_names,
                                 job.method_options);
     DenoiseResult result;
     result.report =
@@ -493,8 +506,11 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
     result.height = report.shape.height;
     result.channel_names = reader.selected_channel_names();
     for (const auto& layer : reader.layers())
-        result.layers.push_back({layer.name, layer.channel_names, layer.sigma_names});
+        result.layers.push_back({layer.name, layer.channel_names, layer.sigma_names, nullptr});
     result.joint = settings.layer_channels.size() < 2;
+    if (!result.joint) // one part per layer, in order
+        for (size_t i = 0; i < result.layers.size() && i < transformed.whitening().size(); ++i)
+            result.layers[i].whiten = whitened_part_json(transformed.whitening()[i]);
     result.renderer = renderer_json(renderer, source.auxiliary_lookups());
     result.beauty = beauty_json(beauty);
     result.rank_map = job.rank_map;
@@ -512,6 +528,21 @@ DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_option
     result.writes_frames = writes_frames;
     result.output_in_memory = output_in_memory;
     return result;
+}
+
+} // namespace
+
+DenoiseResult denoise(const DenoiseJob& job, const CommonOptions& context_options)
+{
+    // The engine's tasks run in an arena of their own, which gives every task the
+    // floating-point settings of this thread (oneTBB captures them when the arena
+    // is made). `run` renders in this process first, and a TBB worker came out
+    // of the render with denormals-are-zero and flush-to-zero set (Embree's:
+    // modestack sets neither); that worker decoded the half subnormals of the
+    // frames it read (DiffDir's darkest pixels) as 0, so the files depended on
+    // which thread read which frame, not only on the input.
+    tbb::task_arena arena;
+    return arena.execute([&] { return denoise_in_arena(job, context_options); });
 }
 
 }  // namespace modestack::app

@@ -108,6 +108,8 @@ struct DenoisedLayer {
     std::string name;
     std::vector<std::string> channels;
     std::vector<std::string> sigma;
+    /// Layers apart: whether --whiten whitened this layer and why (whitened_part_json); null otherwise.
+    nlohmann::ordered_json whiten;
 };
 
 /// What a denoise did: everything its --json summary holds, and the --report page.

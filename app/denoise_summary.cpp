@@ -128,6 +128,8 @@ nlohmann::ordered_json denoise_json(const DenoiseResult& result)
         if (!result.joint && i < report.layers.size()) { // the layer's own modes
             add_modes_json(report.layers[i], entry);
             entry["mode_filter"] = mode_filter_json(report.layers[i]);
+            if (!layer.whiten.is_null())
+                entry["whiten"] = layer.whiten;
         }
         layers.push_back(entry);
     }

@@ -46,8 +46,8 @@ void add_method_options(CLI::App& command, MethodOptions& options)
         "--whiten", options.whiten,
         "Weight every pixel by 1/sqrt(its mean noise variance) before the SVD and back after, so that "
         "bright noisy regions do not take the modes: auto (the default: when the input has a variance layer, "
-        "named as its renderer names them: DiffIndVar, diffuse_indirect_variance, indirectDiffuse_mse), on, "
-        "off");
+        "named as its renderer names them: DiffIndVar, diffuse_indirect_variance, indirectDiffuse_mse; layers "
+        "apart: each layer that has its own), on, off");
     command.add_option(
         "--estimators", options.estimators,
         "Estimators each pixel may take, comma-separated: rebuild (the temporal rebuild), input (the input "
@@ -151,31 +151,19 @@ denoise::Transform apply_method_options(const MethodOptions& options, bool objec
 
 TransformStream::TransformStream(const denoise::Transform& transform, denoise::FrameSource& source,
                                  denoise::FrameSink& sink, denoise::Settings& settings,
-                                 const std::string& input, const MethodOptions& options)
+                                 const VarianceNames& names, const MethodOptions& options)
     : m_transform(transform), m_source(source), m_sink(sink)
 {
-    const bool has_variance =
-        options.whiten != "off" && source.auxiliary_channels(denoise::Auxiliary::Variance) == source.shape().channels;
-    if (options.whiten == "on" && !has_variance)
-        throw bad_input(
-            input, "--whiten on needs a variance layer (as the renderer conventions name it: DiffIndVar, "
-                   "diffuse_indirect_variance, ...; see --renderer) with one channel per denoised "
-                   "channel in every frame");
-    m_whitening_reason = options.whiten == "off"                               ? "off"
-                         : !has_variance                                       ? "no variance layer"
-                         : m_transform.kind != denoise::TransformKind::None ? "off under --transform"
-                                                                               : "variance layer";
-    if (has_variance && m_transform.kind == denoise::TransformKind::None) {
-        m_whitening = denoise::whitening_weights(source);
-        settings.whitening = &m_whitening->weights;
-    }
+    m_whitening = choose_whitening(options.whiten, m_transform.kind != denoise::TransformKind::None, source,
+                                   settings, names);
+    apply_whitening(m_whitening, settings);
     if (m_transform.kind == denoise::TransformKind::None)
         return;
     if (m_transform.kind == denoise::TransformKind::Log) {
         m_shot_mean = denoise::sample_shot_mean(source);
         if (!(m_shot_mean > 0))
             throw bad_input(
-                input,
+                names.input,
                 fmt::format("--transform log needs a shot whose mean is above 0 (it is {})", m_shot_mean));
         m_transform.epsilon = m_transform.epsilon_fraction * m_shot_mean;
     }
@@ -192,7 +180,6 @@ std::vector<double> smoothing_widths(const denoise::Report& report)
         widths.push_back(mode.width);
     return widths;
 }
-std::string settings_whiten_mode(const TransformStream& stream) { return stream.whitening() ? "on" : "off"; }
 
 // Per frame: the share of pixels each estimator won and the RMS of its estimated
 // error over them (sigma's own estimate).
@@ -260,13 +247,7 @@ nlohmann::ordered_json method_json(const TransformStream& stream, const denoise:
                              {"sure_gain", mode.sure_gain},
                              {"jumps", jumps}});
     }
-    json["whiten"] = {{"mode", settings_whiten_mode(stream)}, {"reason", stream.whitening_reason()}};
-    if (const denoise::WhiteningWeights* whitening = stream.whitening())
-        json["whiten"].update({{"mean_variance", whitening->mean_variance},
-                               {"variance_floor", whitening->floor},
-                               {"floored_samples", whitening->floored_samples},
-                               {"weight_min", whitening->smallest},
-                               {"weight_max", whitening->largest}});
+    json["whiten"] = whitening_json(stream.whitening());
     json["weight_smoothing"] = {{"enabled", settings.weight_smoothing.enabled}, {"modes", smoothing}};
     json["estimators"] = estimators_json(settings.estimators, report, frame_numbers);
     nlohmann::ordered_json parts = nlohmann::ordered_json::array();

@@ -6,10 +6,10 @@
 // transform's decorators (core/denoise/transform.h) and writes their JSON block.
 #pragma once
 
+#include "app/whitening_choice.h"
 #include "core/denoise/engine.h"
 #include "core/denoise/segments.h"
 #include "core/denoise/transform.h"
-#include "core/denoise/whitening.h"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
@@ -71,32 +71,29 @@ denoise::Report run_segmented(SegmentRun& run, denoise::FrameSource& source, den
 
 /// The engine's ends with --transform and --whiten in place: for log, ε is set
 /// from the mean of a few frames of `source`, and the floor of --non-negative to
-/// f(0); --whiten (auto: when `source` has a variance layer and no transform is
-/// asked) reads the variance layer once for its weights (core/denoise/whitening.h)
-/// and points settings.whitening at them.
+/// f(0); --whiten (app/whitening_choice.h has the rule: each layer apart on its
+/// own variance) reads the variance layers once for their weights and points
+/// settings.whitening or settings.layer_whitening at them.
 class TransformStream {
 public:
-    /// `source` and `sink` must outlive this object; `input` names the shot in errors.
+    /// `source` and `sink` must outlive this object; `names.input` names the shot in errors.
     TransformStream(const denoise::Transform& transform, denoise::FrameSource& source,
-                    denoise::FrameSink& sink, denoise::Settings& settings, const std::string& input,
+                    denoise::FrameSink& sink, denoise::Settings& settings, const VarianceNames& names,
                     const MethodOptions& options = {});
     denoise::FrameSource& source() { return m_transform_source ? *m_transform_source : m_source; }
     denoise::FrameSink& sink() { return m_inverse_sink ? *m_inverse_sink : m_sink; }
     const denoise::Transform& transform() const { return m_transform; }
     /// The sampled shot mean behind log's ε (0 when not needed).
     double shot_mean() const { return m_shot_mean; }
-    /// The whitening weights, when whitening is on.
-    const denoise::WhiteningWeights* whitening() const { return m_whitening ? &*m_whitening : nullptr; }
-    /// Why whitening is on or off, for the JSON summary.
-    const std::string& whitening_reason() const { return m_whitening_reason; }
+    /// What --whiten decided: one part for one set of modes, else one per layer.
+    const std::vector<WhitenedPart>& whitening() const { return m_whitening; }
 
 private:
     denoise::Transform m_transform;
     double m_shot_mean = 0;
     denoise::FrameSource& m_source;
     denoise::FrameSink& m_sink;
-    std::optional<denoise::WhiteningWeights> m_whitening;
-    std::string m_whitening_reason;
+    std::vector<WhitenedPart> m_whitening;
     std::optional<denoise::TransformSource> m_transform_source;
     std::optional<denoise::InverseTransformSink> m_inverse_sink;
 };

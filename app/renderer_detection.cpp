@@ -203,6 +203,17 @@ AuxiliaryCandidates auxiliary_candidates(const RendererChoice& choice,
     return candidates;
 }
 
+std::vector<std::vector<std::vector<std::string>>>
+layer_variance_candidates(const RendererChoice& choice, const std::vector<io::SelectedLayer>& layers)
+{
+    std::vector<std::vector<std::vector<std::string>>> candidates(layers.size());
+    for (size_t i = 0; i < layers.size(); ++i)
+        for (const RendererConvention* renderer : choice.conventions)
+            for (std::string& name : variance_names(*renderer, layers[i].name))
+                add_candidate(candidates[i], {std::move(name)});
+    return candidates;
+}
+
 std::string describe_candidates(const std::vector<std::vector<std::string>>& candidates)
 {
     std::vector<std::string> names;
@@ -219,6 +230,7 @@ nlohmann::ordered_json renderer_json(const RendererChoice& choice, const std::ve
     json["conventions"] = choice.table;
     nlohmann::ordered_json guides = nlohmann::ordered_json::object();
     nlohmann::ordered_json variance = nullptr;
+    nlohmann::ordered_json layer_variance = nlohmann::ordered_json::array();
     for (const AuxiliaryFound& lookup : lookups) {
         nlohmann::ordered_json looked_for = nlohmann::ordered_json::array();
         for (const std::vector<std::string>& selectors : lookup.looked_for)
@@ -227,13 +239,20 @@ nlohmann::ordered_json renderer_json(const RendererChoice& choice, const std::ve
         entry["found"] = lookup.found.empty()
                              ? nlohmann::ordered_json(nullptr)
                              : nlohmann::ordered_json(fmt::format("{}", fmt::join(lookup.found, " + ")));
-        if (lookup.kind == denoise::Auxiliary::Variance)
+        if (!lookup.layer.empty()) {
+            nlohmann::ordered_json layer_entry{{"layer", lookup.layer}};
+            layer_entry.update(entry);
+            layer_variance.push_back(layer_entry);
+        } else if (lookup.kind == denoise::Auxiliary::Variance) {
             variance = entry;
-        else
+        } else {
             guides[denoise::auxiliary_name(lookup.kind)] = entry;
+        }
     }
     json["guides"] = guides;
     json["variance"] = variance;
+    if (!layer_variance.empty()) // the layers denoised apart, each looked up on its own
+        json["layer_variance"] = layer_variance;
     return json;
 }
 

@@ -53,12 +53,20 @@ using AuxiliaryCandidates = std::array<std::vector<std::vector<std::string>>, 4>
 AuxiliaryCandidates auxiliary_candidates(const RendererChoice& choice,
                                          const std::vector<io::SelectedLayer>& layers);
 
+/// The variance names of each of `layers` on its own (the layers denoised
+/// apart), best first, each candidate a list of one selector: unlike the
+/// variance of auxiliary_candidates, a layer's names are offered whether or not
+/// the other layers have a variance.
+std::vector<std::vector<std::vector<std::string>>>
+layer_variance_candidates(const RendererChoice& choice, const std::vector<io::SelectedLayer>& layers);
+
 /// "ViewLayer.DiffCol, ViewLayer.Denoising Albedo": the candidates of one kind, for messages.
 std::string describe_candidates(const std::vector<std::vector<std::string>>& candidates);
 
 /// What a lookup of one auxiliary kind found.
 struct AuxiliaryFound {
     denoise::Auxiliary kind;
+    std::string layer; ///< a variance of one layer denoised apart ("": of the whole selection)
     std::vector<std::vector<std::string>> looked_for;
     std::vector<std::string> found; ///< the layers read, empty when none was found
 };

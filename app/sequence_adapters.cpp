@@ -14,8 +14,11 @@ denoise::ShotShape SequenceSource::shape() const
     return {m_reader.frame_count(), m_reader.width(), m_reader.height(), m_reader.selected_channel_count()};
 }
 
-SequenceSource::SequenceSource(const io::SequenceReader& reader, AuxiliaryCandidates candidates)
-    : m_reader(reader), m_candidates(std::move(candidates))
+SequenceSource::SequenceSource(const io::SequenceReader& reader, AuxiliaryCandidates candidates,
+                               std::vector<std::vector<std::vector<std::string>>> layer_variance)
+    : m_reader(reader), m_candidates(std::move(candidates)),
+      m_layer_variance_candidates(std::move(layer_variance)),
+      m_layer_variance(m_layer_variance_candidates.size())
 {
 }
 
@@ -44,32 +47,64 @@ std::int64_t SequenceSource::band_bytes_per_row() const
     return bytes;
 }
 
-const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxiliary kind) const
+void SequenceSource::look_up(AuxiliaryInput& input, const std::vector<std::vector<std::string>>& candidates,
+                             int channels) const
 {
-    std::lock_guard<std::mutex> lock(m_auxiliary_mutex);
-    AuxiliaryInput& input = m_auxiliary[static_cast<size_t>(kind)];
-    if (input.looked)
-        return input;
     input.looked = true;
-    for (const std::vector<std::string>& selectors : m_candidates[static_cast<size_t>(kind)]) {
+    for (const std::vector<std::string>& selectors : candidates) {
         try {
             auto reader = std::make_unique<io::SequenceReader>(m_reader.sequence(), selectors, m_reader.exr_codec());
             if (reader->width() != m_reader.width() || reader->height() != m_reader.height())
                 continue;
-            // A variance per selected channel, in the same component order.
-            if (kind == denoise::Auxiliary::Variance &&
-                reader->selected_channel_count() != m_reader.selected_channel_count())
+            if (channels > 0 && reader->selected_channel_count() != channels)
                 continue;
             input.channels = reader->selected_channel_count();
             for (const io::SelectedLayer& layer : reader->layers())
                 input.found.push_back(layer.name);
             input.reader = std::move(reader);
-            return input;
+            return;
         } catch (const Error&) {
             // Not in every frame (or not at all): try the next name.
         }
     }
+}
+
+const SequenceSource::AuxiliaryInput& SequenceSource::auxiliary(denoise::Auxiliary kind) const
+{
+    std::lock_guard<std::mutex> lock(m_auxiliary_mutex);
+    AuxiliaryInput& input = m_auxiliary[static_cast<size_t>(kind)];
+    // A variance per selected channel, in the same component order.
+    if (!input.looked)
+        look_up(input, m_candidates[static_cast<size_t>(kind)],
+                kind == denoise::Auxiliary::Variance ? m_reader.selected_channel_count() : 0);
     return input;
+}
+
+const SequenceSource::AuxiliaryInput& SequenceSource::layer_variance(int layer) const
+{
+    std::lock_guard<std::mutex> lock(m_auxiliary_mutex);
+    if (layer < 0 || static_cast<size_t>(layer) >= m_layer_variance.size())
+        return m_no_input;
+    AuxiliaryInput& input = m_layer_variance[static_cast<size_t>(layer)];
+    // A variance per channel of the layer, in the same component order.
+    if (!input.looked)
+        look_up(input, m_layer_variance_candidates[static_cast<size_t>(layer)],
+                static_cast<int>(m_reader.layers()[static_cast<size_t>(layer)].channel_names.size()));
+    return input;
+}
+
+int SequenceSource::layer_variance_channels(int layer) const
+{
+    return layer_variance(layer).channels;
+}
+
+void SequenceSource::read_layer_variance_rows(int layer, int frame_index, int row_begin, int row_end,
+                                              float* destination)
+{
+    const AuxiliaryInput& input = layer_variance(layer);
+    if (!input.reader)
+        throw internal_error("a layer's variance was read that the input does not have");
+    input.reader->read_selected(frame_index, row_begin, row_end, destination);
 }
 
 std::vector<AuxiliaryFound> SequenceSource::auxiliary_lookups() const
@@ -79,7 +114,11 @@ std::vector<AuxiliaryFound> SequenceSource::auxiliary_lookups() const
     for (size_t kind = 0; kind < m_auxiliary.size(); ++kind)
         if (m_auxiliary[kind].looked)
             lookups.push_back(
-                {static_cast<denoise::Auxiliary>(kind), m_candidates[kind], m_auxiliary[kind].found});
+                {static_cast<denoise::Auxiliary>(kind), "", m_candidates[kind], m_auxiliary[kind].found});
+    for (size_t layer = 0; layer < m_layer_variance.size(); ++layer)
+        if (m_layer_variance[layer].looked)
+            lookups.push_back({denoise::Auxiliary::Variance, m_reader.layers()[layer].name,
+                               m_layer_variance_candidates[layer], m_layer_variance[layer].found});
     return lookups;
 }
 

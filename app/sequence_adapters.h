@@ -29,7 +29,10 @@ class SequenceSource : public denoise::FrameSource {
 public:
     /// `candidates` are the layer names tried for each auxiliary kind, best first
     /// (auxiliary_candidates of the shot's renderer conventions).
-    SequenceSource(const io::SequenceReader& reader, AuxiliaryCandidates candidates);
+    /// `layer_variance` has each selected layer's own variance names
+    /// (layer_variance_candidates; empty: no layer is looked up on its own).
+    SequenceSource(const io::SequenceReader& reader, AuxiliaryCandidates candidates,
+                   std::vector<std::vector<std::vector<std::string>>> layer_variance = {});
     denoise::ShotShape shape() const override;
     void read_rows(int frame_index, int row_begin, int row_end, float* destination,
                    denoise::PassThroughRows* pass_through) override;
@@ -41,6 +44,17 @@ public:
     int auxiliary_channels(denoise::Auxiliary kind) const override;
     void read_auxiliary_rows(denoise::Auxiliary kind, int frame_index, int row_begin, int row_end,
                              float* destination) override;
+    /// A layer's own variance: the first of its names that every frame has at
+    /// the frames' size with one channel per channel of the layer (opened at
+    /// the first query); 0 when none is found.
+    int layer_variance_channels(int layer) const override;
+    void read_layer_variance_rows(int layer, int frame_index, int row_begin, int row_end,
+                                  float* destination) override;
+    /// The names layer `layer`'s own variance is looked for under, best first.
+    const std::vector<std::vector<std::string>>& layer_variance_candidates(int layer) const
+    {
+        return m_layer_variance_candidates.at(static_cast<size_t>(layer));
+    }
     /// The sequence opened for `kind`'s layer (opening it now), or nullptr when
     /// the input has none: for the memory budget, which counts its open files.
     const io::SequenceReader* auxiliary_reader(denoise::Auxiliary kind) const;
@@ -60,11 +74,18 @@ private:
         std::unique_ptr<io::SequenceReader> reader;
     };
     const AuxiliaryInput& auxiliary(denoise::Auxiliary kind) const;
+    const AuxiliaryInput& layer_variance(int layer) const;
+    // Opens the first of `candidates` every frame has at the frames' size with `channels` channels (0: any).
+    void look_up(AuxiliaryInput& input, const std::vector<std::vector<std::string>>& candidates,
+                 int channels) const;
 
     const io::SequenceReader& m_reader;
     AuxiliaryCandidates m_candidates;
+    std::vector<std::vector<std::vector<std::string>>> m_layer_variance_candidates;
     mutable std::mutex m_auxiliary_mutex;
     mutable std::array<AuxiliaryInput, 4> m_auxiliary;  // by denoise::Auxiliary
+    mutable std::vector<AuxiliaryInput> m_layer_variance; // by selected layer
+    AuxiliaryInput m_no_input;                            // a layer without names
 };
 
 /// FrameSink writing one output file per input frame.

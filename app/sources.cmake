@@ -29,6 +29,7 @@ target_sources(modestack_app PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/color_adapters.cpp
   ${CMAKE_CURRENT_LIST_DIR}/memory_budget.cpp
   ${CMAKE_CURRENT_LIST_DIR}/method_options.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/whitening_choice.cpp
   ${CMAKE_CURRENT_LIST_DIR}/denoise_stages.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mpi_job.cpp
   ${CMAKE_CURRENT_LIST_DIR}/option_values.cpp

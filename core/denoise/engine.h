@@ -79,6 +79,11 @@ struct Settings {
     /// --whiten: a weight per sample of the image ([row][x][channel]); the modes come
     /// from the weighted rows, everything else from the rows as read (whitening.h).
     const std::vector<float>* whitening = nullptr;
+    /// --whiten with the layers apart (layer_channels): each layer's own weights
+    /// ([row][x][channel of the layer], whitening.h's layer_whitening_weights),
+    /// null for a layer that is not whitened; empty: no layer is. `whitening`
+    /// (weights of every channel together) is then null.
+    std::vector<const std::vector<float>*> layer_whitening;
     /// --estimators: a per-pixel choice among the rebuild and other estimators
     /// (estimator_choice.h); none enabled: the rebuild everywhere.
     EstimatorOptions estimators;

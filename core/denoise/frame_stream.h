@@ -74,6 +74,22 @@ public:
     {
         (void)kind, (void)frame_index, (void)row_begin, (void)row_end, (void)destination;
     }
+    /// The variance of selected layer `layer` alone (the layers of
+    /// Settings::layer_channels, in order): its channels, one per channel of
+    /// the layer, or 0 when the input has none for it. A renderer may write a
+    /// variance for some layers only (ours: DiffIndVar, no DiffDirVar), which
+    /// the whole-selection Variance above cannot show.
+    virtual int layer_variance_channels(int layer) const
+    {
+        (void)layer;
+        return 0;
+    }
+    /// Reads rows of layer `layer`'s variance like read_rows; only for a layer with channels.
+    virtual void read_layer_variance_rows(int layer, int frame_index, int row_begin, int row_end,
+                                          float* destination)
+    {
+        (void)layer, (void)frame_index, (void)row_begin, (void)row_end, (void)destination;
+    }
 };
 
 /// A FrameSource that hands on another's rows unchanged: decorators derive from
@@ -93,6 +109,12 @@ public:
     void read_auxiliary_rows(Auxiliary kind, int frame_index, int row_begin, int row_end, float* destination) override
     {
         m_inner.read_auxiliary_rows(kind, frame_index, row_begin, row_end, destination);
+    }
+    int layer_variance_channels(int layer) const override { return m_inner.layer_variance_channels(layer); }
+    void read_layer_variance_rows(int layer, int frame_index, int row_begin, int row_end,
+                                  float* destination) override
+    {
+        m_inner.read_layer_variance_rows(layer, frame_index, row_begin, row_end, destination);
     }
 
 protected:

@@ -30,19 +30,14 @@ struct Layer {
           settings(shared), context{source, sink, settings, Progress::silent()}
     {
         settings.layer_channels.clear();
-        if (shared.whitening) { // the layer's channels of each sample's weight
-            const ShotShape shape = rows.shape();
-            const std::int64_t pixels = static_cast<std::int64_t>(shape.width) * shape.height;
-            whitening.resize(static_cast<size_t>(pixels) * range.count);
-            copy_channels(shared.whitening->data(), shape.channels, range, pixels, whitening.data());
-            settings.whitening = &whitening;
-        }
+        settings.layer_whitening.clear();
+        // The layer's own weights (from its own variance), as a run of it alone would have them.
+        settings.whitening = shared.layer_whitening.empty() ? nullptr : shared.layer_whitening[index];
     }
 
     LayerSource source;
     LayerSink sink;
     Settings settings;
-    std::vector<float> whitening;
     PassContext context;
     std::optional<RunPlan> plan; // RunPlan holds a FeatureGuide, which cannot be assigned
     std::optional<ShotStream> stream;
@@ -74,6 +69,13 @@ std::vector<Report> run_layers(FrameSource& source, FrameSink& sink, const Setti
     const std::vector<ChannelRange> ranges = layer_ranges(settings.layer_channels, shape);
     if (ranges.size() < 2)
         throw internal_error("run_layers needs at least two layers");
+    // Weights of every channel together have the wrong normalisation for any one layer.
+    if (settings.whitening)
+        throw internal_error(
+            "layers apart are whitened by Settings::layer_whitening, not Settings::whitening");
+    if (!settings.layer_whitening.empty() && settings.layer_whitening.size() != ranges.size())
+        throw internal_error(fmt::format("{} layers' whitening weights for {} layers",
+                                         settings.layer_whitening.size(), ranges.size()));
     SharedRows rows(source);
     LayerCombiner combiner(sink, shape, ranges);
     std::vector<std::unique_ptr<Layer>> layers;

@@ -71,6 +71,13 @@ public:
     {
         m_inner.read_auxiliary_rows(kind, m_segment.first + frame_index, row_begin, row_end, destination);
     }
+    int layer_variance_channels(int layer) const override { return m_inner.layer_variance_channels(layer); }
+    void read_layer_variance_rows(int layer, int frame_index, int row_begin, int row_end,
+                                  float* destination) override
+    {
+        m_inner.read_layer_variance_rows(layer, m_segment.first + frame_index, row_begin, row_end,
+                                         destination);
+    }
 
 private:
     FrameSource& m_inner;

@@ -11,6 +11,47 @@
 #include <cstdint>
 
 namespace modestack::denoise {
+namespace {
+
+// One layer's variance as the whole-selection Variance of a shot of that layer's channels.
+class LayerVarianceView : public FrameSource {
+public:
+    LayerVarianceView(FrameSource& source, int layer, int channels)
+        : m_source(source), m_layer(layer), m_shape(source.shape())
+    {
+        m_shape.channels = channels;
+    }
+    ShotShape shape() const override { return m_shape; }
+    void read_rows(int, int, int, float*, PassThroughRows*) override
+    {
+        throw internal_error("a layer's variance view has no rows of its own");
+    }
+    int auxiliary_channels(Auxiliary kind) const override
+    {
+        return kind == Auxiliary::Variance ? m_source.layer_variance_channels(m_layer) : 0;
+    }
+    void read_auxiliary_rows(Auxiliary kind, int frame_index, int row_begin, int row_end,
+                             float* destination) override
+    {
+        if (kind != Auxiliary::Variance)
+            throw internal_error("a layer's variance view has no guides");
+        m_source.read_layer_variance_rows(m_layer, frame_index, row_begin, row_end, destination);
+    }
+
+private:
+    FrameSource& m_source;
+    int m_layer;
+    ShotShape m_shape;
+};
+
+} // namespace
+
+WhiteningWeights layer_whitening_weights(FrameSource& source, int layer, int channels,
+                                         const WhiteningOptions& options)
+{
+    LayerVarianceView view(source, layer, channels);
+    return whitening_weights(view, options);
+}
 
 WhiteningWeights whitening_weights(FrameSource& source, const WhiteningOptions& options)
 {

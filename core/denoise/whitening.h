@@ -52,4 +52,12 @@ struct WhiteningWeights {
 /// negative or not finite.
 WhiteningWeights whitening_weights(FrameSource& source, const WhiteningOptions& options = {});
 
+/// The weights of layer `layer` (of `channels` channels) when the layers are
+/// denoised apart, from its own variance alone (source.layer_variance_channels):
+/// whitening_weights of a shot of that layer's channels, so the same bits as a
+/// run of the layer alone (its own mean variance, floor and normalisation, not
+/// those of every layer together). Errors as whitening_weights.
+WhiteningWeights layer_whitening_weights(FrameSource& source, int layer, int channels,
+                                         const WhiteningOptions& options = {});
+
 }  // namespace modestack::denoise

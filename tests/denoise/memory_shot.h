@@ -19,6 +19,9 @@ struct MemoryShot : FrameSource {
     /// Optional auxiliary layers, frames like `frames`: the variance of each sample
     /// (channels as the shot), and features with their own channel counts.
     std::vector<std::vector<float>> variance;
+    /// Optional variance of each layer on its own (FrameSource::layer_variance_channels):
+    /// per layer, its frames ([row][x][channel of the layer]; none: the layer has none).
+    std::vector<std::vector<std::vector<float>>> layer_variance;
     struct Feature {
         int channels = 0;
         std::vector<std::vector<float>> frames;
@@ -51,6 +54,21 @@ struct MemoryShot : FrameSource {
         REQUIRE(auxiliary_channels(kind) > 0);
         const std::vector<float>& source = kind == Auxiliary::Variance ? variance[frame] : feature(kind)->frames[frame];
         std::size_t row = static_cast<std::size_t>(size.width) * auxiliary_channels(kind);
+        std::copy(source.begin() + row_begin * row, source.begin() + row_end * row, destination);
+    }
+    int layer_variance_channels(int layer) const override
+    {
+        if (static_cast<std::size_t>(layer) >= layer_variance.size() || layer_variance[layer].empty())
+            return 0;
+        return static_cast<int>(layer_variance[layer].front().size() /
+                                (static_cast<std::size_t>(size.width) * size.height));
+    }
+    void read_layer_variance_rows(int layer, int frame, int row_begin, int row_end,
+                                  float* destination) override
+    {
+        REQUIRE(layer_variance_channels(layer) > 0);
+        const std::vector<float>& source = layer_variance[layer][frame];
+        std::size_t row = static_cast<std::size_t>(size.width) * layer_variance_channels(layer);
         std::copy(source.begin() + row_begin * row, source.begin() + row_end * row, destination);
     }
 };

@@ -3,16 +3,19 @@
 // gram and rsvd, with and without the mode filter and the estimator choice);
 // the files are decoded once per pass, not once per layer; and a layer whose
 // light differs from the other's is denoised better on its own modes than on
-// shared ones.
+// shared ones. With --whiten a layer that has its own variance is whitened by
+// weights from that variance alone, the same bits as a run of it alone.
 #include "core/common/error.h"
 #include "core/denoise/engine.h"
 #include "core/denoise/passes.h"
+#include "core/denoise/whitening.h"
 #include "tests/denoise/memory_shot.h"
 
 #include <doctest/doctest.h>
 
 #include <atomic>
 #include <cmath>
+#include <optional>
 #include <random>
 #include <string>
 #include <vector>
@@ -114,7 +117,107 @@ std::int64_t streaming_budget(const MemoryShot& shot, const Settings& settings)
     return 0;
 }
 
+// A noise variance for layer `layer`'s channel c that varies over the image
+// and over time, per frame [row][x][channel] (3 channels: one layer; 6: both).
+std::vector<std::vector<float>> variance_of(int layer)
+{
+    const int channels = layer < 0 ? 6 : 3;
+    std::vector<std::vector<float>> frames;
+    for (int t = 0; t < kFrames; ++t) {
+        std::vector<float> frame(std::size_t(kWidth) * kHeight * channels);
+        for (std::size_t p = 0; p < std::size_t(kWidth) * kHeight; ++p)
+            for (int c = 0; c < channels; ++c) {
+                const int l = layer < 0 ? c / 3 : layer;
+                const std::size_t x = p % kWidth, y = p / kWidth;
+                frame[p * channels + c] =
+                    0.01f * (1 + l * 4) * (1.0f + float((x * 3 + y + c) % 11)) * (1.0f + 0.1f * float(t % 3));
+            }
+        frames.push_back(frame);
+    }
+    return frames;
+}
+
 } // namespace
+
+TEST_CASE("layer runs: a layer's whitening weights are those of the layer alone, not a slice of all layers'")
+{
+    MemoryShot both = shot_of(-1, 0.1f);
+    both.layer_variance = {{}, variance_of(1)}; // like our renders: DiffInd has DiffIndVar, DiffDir none
+    CHECK(both.layer_variance_channels(0) == 0);
+    REQUIRE(both.layer_variance_channels(1) == 3);
+    MemoryShot alone = shot_of(1, 0.1f);
+    alone.variance = variance_of(1);
+    const WhiteningWeights layer = layer_whitening_weights(both, 1, 3);
+    const WhiteningWeights single = whitening_weights(alone);
+    CHECK(layer.weights == single.weights);
+    CHECK(layer.mean_variance == single.mean_variance);
+    CHECK(layer.floor == single.floor);
+    CHECK(layer.floored_samples == single.floored_samples);
+
+    // Weights of both layers' variance together are normalised over both: their slice is not the layer's.
+    MemoryShot whole = shot_of(-1, 0.1f);
+    whole.variance = variance_of(-1);
+    const std::vector<float> slice = layer_of({whitening_weights(whole).weights}, 3).front();
+    REQUIRE(slice.size() == single.weights.size());
+    CHECK(slice != single.weights);
+}
+
+TEST_CASE("layer runs: whitened per layer, each layer gets the bits of a run of it alone, kept and streamed")
+{
+    MemoryShot both = shot_of(-1, 0.1f);
+    both.layer_variance = {{}, variance_of(1)};
+    const WhiteningWeights weights = layer_whitening_weights(both, 1, 3);
+    for (bool kept : {true, false}) {
+        CAPTURE(kept);
+        Settings settings;
+        settings.mode_filter.enabled = true;
+        settings.estimators.input = settings.estimators.spatial = true;
+        if (!kept)
+            settings.max_memory_bytes = streaming_budget(both, settings);
+        Settings layers = layered(settings);
+        layers.layer_whitening = {nullptr, &weights.weights};
+        MemorySink sink(both.size);
+        MemoryShot input = both;
+        const Report report = run_denoise(input, sink, layers, Progress::silent());
+        CHECK(report.plan.in_memory == kept);
+        REQUIRE(report.layers.size() == 2);
+        for (int layer : {0, 1}) {
+            CAPTURE(layer);
+            MemoryShot alone = shot_of(layer, 0.1f);
+            Settings alone_settings = settings;
+            std::optional<WhiteningWeights> alone_weights;
+            if (layer == 1) {
+                alone.variance = variance_of(1);
+                alone_weights = whitening_weights(alone);
+                alone_settings.whitening = &alone_weights->weights;
+            }
+            MemorySink alone_sink(alone.size);
+            run_denoise(alone, alone_sink, alone_settings, Progress::silent());
+            CHECK(layer_of(sink.rebuilt, 3 * layer) == alone_sink.rebuilt);
+            CHECK(layer_of(sink.sigma, 3 * layer) == alone_sink.sigma);
+            if (layer == 1) { // the weights changed something: unwhitened B is another result
+                MemorySink plain(alone.size);
+                run_denoise(alone, plain, settings, Progress::silent());
+                CHECK(plain.rebuilt != alone_sink.rebuilt);
+            }
+        }
+    }
+}
+
+TEST_CASE("layer runs: weights of every channel together are refused, they would not be any layer's")
+{
+    MemoryShot both = shot_of(-1, 0.1f);
+    both.variance = variance_of(-1);
+    const WhiteningWeights weights = whitening_weights(both);
+    MemorySink sink(both.size);
+    Settings settings;
+    settings.layer_channels = {3, 3};
+    settings.whitening = &weights.weights;
+    CHECK_THROWS_AS(run_denoise(both, sink, settings, Progress::silent()), Error);
+    settings.whitening = nullptr;
+    settings.layer_whitening = {&weights.weights}; // one layer's worth for two layers
+    CHECK_THROWS_AS(run_denoise(both, sink, settings, Progress::silent()), Error);
+}
 
 TEST_CASE("layer runs: each layer gets the bits of a run of it alone, kept and streamed, gram and rsvd, "
           "filtered or not")

@@ -1,6 +1,8 @@
 // End-to-end: `denoise --layer A --layer B` denoises each layer on its own
 // modes and N in one run. On a rendered shot: each layer's pixels and sigma
-// equal a run of that layer alone, the untouched channels equal the input's
+// equal runs of the layers one after another (DiffDir, then DiffInd on its
+// output), --whiten included (DiffInd whitened by its own DiffIndVar, DiffDir,
+// which has no variance layer, not), the untouched channels equal the input's
 // bits, the JSON summary and the header give each layer's N, --joint shares one
 // set of modes as before, and what needs one set of modes (--stage,
 // --save-modes, --rank-map) is refused with a one-line usage error naming --joint.
@@ -11,6 +13,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <filesystem>
 #include <set>
 #include <string>
 #include <vector>
@@ -50,19 +53,23 @@ nlohmann::json load_json(const std::string& path)
 } // namespace
 
 TEST_CASE(
-    "denoise --layer A --layer B: each layer on its own modes, the bits of a run of it alone, in one run")
+    "denoise --layer A --layer B: each layer on its own modes, whitened on its own variance, the bits of "
+    "the layers run one after another")
 {
     TempDir dir;
     run_ok("render --scene switch --frames 1-" + std::to_string(kFrames) + " --spp 2 --size 48x36 -q -o " +
            dir.file("in.####.exr"));
     const std::string input = dir.file("in.####.exr");
-    // --whiten off: a run of DiffInd alone would whiten it by DiffIndVar, which DiffDir has no counterpart
-    // of.
-    run_ok("denoise " + input + " --layer DiffInd --layer DiffDir --whiten off -q -o " +
+    // --whiten auto: DiffInd is whitened by its own DiffIndVar, as in a run of it alone.
+    run_ok("denoise " + input + " --layer DiffInd --layer DiffDir --whiten auto -q -o " +
            dir.file("both/d.####.exr") + " --json " + dir.file("both.json"));
-    run_ok("denoise " + input + " --layer DiffInd --whiten off -q -o " + dir.file("ind/d.####.exr"));
-    run_ok("denoise " + input + " --layer DiffDir --whiten off -q -o " + dir.file("dir/d.####.exr"));
-    run_ok("denoise " + input + " --layer DiffInd --layer DiffDir --joint --whiten off -q -o " +
+    // Chained, as `run` did: DiffDir first, then DiffInd on its output.
+    run_ok("denoise " + input + " --layer DiffDir --whiten auto -q -o " + dir.file("dir/d.####.exr"));
+    run_ok("denoise " + dir.file("dir/d.####.exr") + " --layer DiffInd --whiten auto -q -o " +
+           dir.file("chain/d.####.exr") + " --json " + dir.file("chain.json"));
+    run_ok("denoise " + input + " --layer DiffInd --layer DiffDir --whiten off -q -o " +
+           dir.file("plain/d.####.exr"));
+    run_ok("denoise " + input + " --layer DiffInd --layer DiffDir --joint -q -o " +
            dir.file("joint/d.####.exr") + " --json " + dir.file("joint.json"));
 
     const nlohmann::json both = load_json(dir.file("both.json"));
@@ -74,22 +81,40 @@ TEST_CASE(
     CHECK(ind_modes >= 1);
     CHECK(dir_modes >= 1);
     CHECK(both["rank"]["n"] == ind_modes); // the top level repeats the first layer's
+    // Whitened per layer, each saying why; the top level sums it up.
+    CHECK(both["layers"][0]["whiten"]["mode"] == "on");
+    CHECK(both["layers"][0]["whiten"]["reason"] == "variance layer");
+    CHECK(both["layers"][1]["whiten"]["mode"] == "off");
+    CHECK(both["layers"][1]["whiten"]["reason"] == "no variance layer");
+    CHECK(both["method"]["whiten"]["mode"] == "per layer");
+    CHECK(both["layers"][0]["whiten"]["weight_max"] ==
+          load_json(dir.file("chain.json"))["method"]["whiten"]["weight_max"]);
+    CHECK(both["renderer"]["layer_variance"][0]["found"] == "DiffIndVar");
+    CHECK(both["renderer"]["layer_variance"][1]["found"].is_null());
     const nlohmann::json joint = load_json(dir.file("joint.json"));
     CHECK(joint["joint"] == true);
     CHECK_FALSE(joint["layers"][0].contains("rank"));
+    // --joint keeps the rule of one set of modes: whitened only when every layer has a variance.
+    CHECK(joint["method"]["whiten"]["mode"] == "off");
+    CHECK(joint["method"]["whiten"]["reason"] == "no variance layer");
     CHECK(testkit::read_string_attribute(frame_file(dir, "both/d.%04d.exr", 1), "modestack:layer_ranks") ==
           "DiffInd=" + std::to_string(ind_modes) + ",DiffDir=" + std::to_string(dir_modes));
     CHECK(testkit::read_string_attribute(frame_file(dir, "joint/d.%04d.exr", 1), "modestack:layer_ranks") ==
           "");
 
-    bool joint_differs = false;
+    bool joint_differs = false, whitening_changed = false;
     for (int frame = 1; frame <= kFrames; ++frame) {
         CAPTURE(frame);
         const std::string out = frame_file(dir, "both/d.%04d.exr", frame);
+        const std::string chained = frame_file(dir, "chain/d.%04d.exr", frame);
         CHECK(testkit::read_channels(out, rgb_and_sigma("DiffInd")) ==
-              testkit::read_channels(frame_file(dir, "ind/d.%04d.exr", frame), rgb_and_sigma("DiffInd")));
+              testkit::read_channels(chained, rgb_and_sigma("DiffInd")));
         CHECK(testkit::read_channels(out, rgb_and_sigma("DiffDir")) ==
-              testkit::read_channels(frame_file(dir, "dir/d.%04d.exr", frame), rgb_and_sigma("DiffDir")));
+              testkit::read_channels(chained, rgb_and_sigma("DiffDir")));
+        whitening_changed =
+            whitening_changed ||
+            testkit::read_channels(out, rgb_and_sigma("DiffInd")) !=
+                testkit::read_channels(frame_file(dir, "plain/d.%04d.exr", frame), rgb_and_sigma("DiffInd"));
         // Untouched layers pass through bit for bit.
         const std::vector<std::string> untouched{"DiffCol.R", "DiffCol.G", "DiffCol.B", "Emit.R", "Depth.Z"};
         CHECK(testkit::read_channels(out, untouched) ==
@@ -99,7 +124,19 @@ TEST_CASE(
             testkit::read_channels(out, rgb_and_sigma("DiffDir")) !=
                 testkit::read_channels(frame_file(dir, "joint/d.%04d.exr", frame), rgb_and_sigma("DiffDir"));
     }
-    CHECK(joint_differs); // --joint still shares one set of modes
+    CHECK(joint_differs);     // --joint still shares one set of modes
+    CHECK(whitening_changed); // DiffInd's weights did something
+
+    // --whiten on wants every layer apart to have a variance: one line naming the file and the names.
+    const testkit::CliResult refused =
+        run_modestack("denoise " + input + " --layer DiffInd --layer DiffDir --whiten on -q -o " +
+                      dir.file("on/d.####.exr"));
+    CHECK(refused.exit_code == 1);
+    CHECK(refused.err.find(input) != std::string::npos);
+    CHECK(refused.err.find("variance layer of DiffDir") != std::string::npos);
+    CHECK(refused.err.find("looked for DiffDirVar") != std::string::npos);
+    CHECK(std::count(refused.err.begin(), refused.err.end(), '\n') == 1);
+    CHECK_FALSE(std::filesystem::exists(frame_file(dir, "on/d.%04d.exr", 1)));
 }
 
 TEST_CASE("denoise with several layers apart refuses what needs one set of modes, naming --joint")

@@ -3,7 +3,9 @@
 // refine, no higher than the noisy input), blends without a seam, leaves every
 // other pixel and channel alone, does nothing with --budget 0, gives the same
 // pixels for any --threads, and refuses bad inputs with one line and no output.
-// `modestack run` writes every promised output, the same pixels for any --threads.
+// `modestack run` writes every promised output, the same pixels for any --threads,
+// and denoised frames with the bits of the denoise stages run by hand one after
+// another (DiffDir, then DiffInd on its output), which run does in one pass.
 #include "tests/tools/testkit.h"
 
 #include <doctest/doctest.h>
@@ -256,8 +258,31 @@ TEST_CASE("run writes every output and the same pixels for --threads 1 and 2")
     REQUIRE_MESSAGE(one.exit_code == 0, one.err);
     auto two = run_modestack(common + "--threads 2 --reference-spp 32 -o " + dir.file("two"));
     REQUIRE_MESSAGE(two.exit_code == 0, two.err);
-    for (const char* folder : {"noisy", "direct", "denoised", "refined", "final", "masks"})
+    for (const char* folder : {"noisy", "denoised", "refined", "final", "masks"})
         CHECK(testkit::list_directory(dir.file(std::string("one/") + folder)).size() == 8);
+    CHECK_FALSE(std::filesystem::exists(dir.file("one/direct"))); // both layers in one denoise pass
+    // By hand, as run did before: DiffDir, then DiffInd (whitened by DiffIndVar) on its output. The same
+    // bits, though run renders in its own process first (whose threads must not change the decode).
+    const std::string by_hand = "denoise --no-update-beauty -q ";
+    auto direct = run_modestack(by_hand + dir.file("one/noisy/switch.####.exr") + " --layer DiffDir -o " +
+                                dir.file("hand_direct/d.####.exr"));
+    REQUIRE_MESSAGE(direct.exit_code == 0, direct.err);
+    auto indirect = run_modestack(by_hand + dir.file("hand_direct/d.####.exr") + " --layer DiffInd -o " +
+                                  dir.file("hand/d.####.exr"));
+    REQUIRE_MESSAGE(indirect.exit_code == 0, indirect.err);
+    for (int frame = 30; frame <= 37; ++frame) {
+        CAPTURE(frame);
+        char run_name[64], hand_name[64];
+        std::snprintf(run_name, sizeof run_name, "one/denoised/switch.%04d.exr", frame);
+        std::snprintf(hand_name, sizeof hand_name, "hand/d.%04d.exr", frame);
+        for (const char* layer : {"DiffDir", "DiffInd"}) {
+            std::vector<std::string> channels;
+            for (const char* suffix : {".R", ".G", ".B", ".sigma.R", ".sigma.G", ".sigma.B"})
+                channels.push_back(layer + std::string(suffix));
+            CHECK(testkit::read_channels(dir.file(run_name), channels) ==
+                  testkit::read_channels(dir.file(hand_name), channels));
+        }
+    }
     CHECK(std::filesystem::exists(dir.file("two/contact_sheet.png")));
     for (int frame : {30, 33, 37}) {
         char name[64];
