@@ -7,8 +7,11 @@
 #   bench/estimators/scenes.sh MODESTACK [WORK]
 # Environment: SIZE (128x96), FRAMES (1-48), SPP (4), REF_SPP (256 per seed; two
 # seeds), SCENES (static orbit switch spin sweep cross), CYCLES_DIR
-# (../shared/cycles; skipped when absent), CHOICES (the --estimators lists scored
-# beside the default; "rebuild,input,spatial").
+# (../shared/cycles; skipped when absent), ORBIT_CROSS_DIR (the OUTDIR of
+# bench/cycles/render.sh: a Cycles shot with an orbiting light, a crossing sphere
+# and a light switched on; WORK/orbit_cross_room/render; skipped unless its three
+# variants are complete), CHOICES (the --estimators lists scored beside the
+# default; "rebuild,input,spatial").
 # Renders are kept in WORK and reused. ~35 min of CPU for the references at
 # 128x96 on the 2-core machine of 2026-12-04.
 # Needs /usr/bin/python3 with Debian's python3-numpy and python3-openimageio.
@@ -22,6 +25,7 @@ spp=${SPP:-4}
 ref_spp=${REF_SPP:-256}
 scenes=${SCENES:-static orbit switch spin sweep cross}
 cycles=${CYCLES_DIR:-$here/../../../shared/cycles}
+orbit_cross=${ORBIT_CROSS_DIR:-$work/orbit_cross_room/render}
 choices=${CHOICES:-rebuild,input,spatial}
 mkdir -p "$work"
 
@@ -49,7 +53,7 @@ denoise()
 }
 
 # The transient frames of each shot: where content changes for a few frames.
-declare -A transient=([switch]=30-36 [cross]=20-27 [sweep_room]=20-27)
+declare -A transient=([switch]=30-36 [cross]=20-27 [sweep_room]=20-27 [orbit_cross_room]=20-29)
 shots=()
 for scene in $scenes; do
     render noisy "$spp" 1 "$scene"
@@ -61,6 +65,11 @@ for shot in sweep_room spin_room; do
     [ -d "$cycles/$shot" ] || { echo "SKIPPED: $cycles/$shot not found"; continue; }
     shots+=("$shot|$cycles/$shot/spp4/frame.####.exr|$cycles/$shot/ref/frame.*.exr||ViewLayer.")
 done
+if [ -f "$orbit_cross/noisy/done" ] && [ -f "$orbit_cross/ref_a/done" ] && [ -f "$orbit_cross/ref_b/done" ]; then
+    shots+=("orbit_cross_room|$orbit_cross/noisy/frame.####.exr|$orbit_cross/ref_a/frame.*.exr|$orbit_cross/ref_b/frame.*.exr|ViewLayer.")
+else
+    echo "SKIPPED: $orbit_cross has no complete noisy, ref_a, ref_b (render them with bench/cycles/render.sh)"
+fi
 
 for entry in "${shots[@]}"; do
     IFS='|' read -r name input ref_a ref_b prefix <<< "$entry"
