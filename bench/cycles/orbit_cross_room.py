@@ -11,6 +11,7 @@ frame's content depends only on its number (a subset of frames renders the same)
 Run inside Blender (Debian 12 package, 3.4.1):
   blender -b -t 2 -P orbit_cross_room.py -- --spp 4 --seed 1 --frames 1-48 \
       --res 128x96 --out DIR
+--without-crosser renders the same frames with the sphere hidden throughout.
 Writes DIR/frame.####.exr (multi-layer EXR, colour passes half, layer prefix
 "ViewLayer.") and DIR/timing.json (seconds per frame: scene sync + path tracing).
 """
@@ -47,6 +48,8 @@ def parse_args():
     parser.add_argument('--frames', default=f'1-{SHOT_FRAMES}', help='FIRST-LAST')
     parser.add_argument('--res', default='128x96', help='WIDTHxHEIGHT')
     parser.add_argument('--out', required=True, help='output directory')
+    parser.add_argument('--without-crosser', action='store_true',
+                        help='hide the crossing sphere in every frame (to find its region and shadow)')
     args = parser.parse_args(argv)
     args.first, args.last = (int(v) for v in args.frames.split('-'))
     args.width, args.height = (int(v) for v in args.res.lower().split('x'))
@@ -148,7 +151,7 @@ def build_lights(frames):
     key_constant(fill_data)
 
 
-def build_crossing_sphere(frames):
+def build_crossing_sphere(frames, hidden):
     bpy.ops.mesh.primitive_uv_sphere_add(radius=CROSS_RADIUS, segments=32, ring_count=16)
     sphere = bpy.context.active_object
     sphere.name = 'crosser'
@@ -159,7 +162,7 @@ def build_crossing_sphere(frames):
         present = CROSS_FIRST <= f <= CROSS_LAST
         t = (f - CROSS_FIRST) / span if present else 0.0
         sphere.location = (-CROSS_X + 2 * CROSS_X * t, CROSS_Y, CROSS_Z)
-        sphere.hide_render = not present
+        sphere.hide_render = hidden or not present
         sphere.keyframe_insert('location', frame=f)
         sphere.keyframe_insert('hide_render', frame=f)
     key_constant(sphere)
@@ -229,7 +232,7 @@ def main():
     build_room()
     build_static_objects()
     build_lights(frames)
-    build_crossing_sphere(frames)
+    build_crossing_sphere(frames, args.without_crosser)
     build_camera(args)
     configure_render(args)
 

@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
 # Renders the orbit_cross_room shot with Blender Cycles (Debian 12 package):
 # 48 frames at 128x96, noisy (4 spp, seed 1) and two references with other seeds
-# (512 spp, seeds 7 and 8) so that scoring can count the reference's own noise.
+# (512 spp, seeds 7 and 8) so that scoring can count the reference's own noise,
+# and `without`: frames 20-29 at 512 spp (seed 9) without the crossing sphere, to
+# find the pixels of the sphere and its shadow (bench/cycles/per_frame.py).
 #
 #   bench/cycles/render.sh OUTDIR
-# Writes OUTDIR/{noisy,ref_a,ref_b}/frame.####.exr, a timing.json in each, and
+# Writes OUTDIR/{noisy,ref_a,ref_b,without}/frame.####.exr, a timing.json in each, and
 # OUTDIR/render.log (one line per variant: wall and CPU seconds, load average).
 # Environment: FRAMES (1-48), RES (128x96), REF_SPP (512). A variant that holds
-# a "done" file is kept. ~12 min on the 2-core machine of 2026-12-05.
+# a "done" file is kept. ~20 min on the 2-core machine of 2026-12-05 (loaded).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 out=${1:?usage: render.sh OUTDIR}
@@ -23,10 +25,11 @@ mkdir -p "$out"
 log=$out/render.log
 echo "# $(date -u +%FT%TZ) $(blender --version | head -1), $(nproc) cores, frames $frames, $res" >> "$log"
 
-# variant NAME SPP SEED
+# variant NAME SPP SEED FRAMES [OPTIONS]
 variant()
 {
-    local name=$1 spp=$2 seed=$3 directory=$out/$1
+    local name=$1 spp=$2 seed=$3 range=$4 directory=$out/$1
+    shift 4
     [ -f "$directory/done" ] && { echo "$name: kept" >> "$log"; return; }
     rm -rf "$directory"
     local load_before
@@ -34,14 +37,15 @@ variant()
     local start=$SECONDS
     /usr/bin/time -f '%e %U %S' -o "$out/$name.time" \
         nice blender -b -t 2 -P "$here/orbit_cross_room.py" -- --spp "$spp" --seed "$seed" \
-        --frames "$frames" --res "$res" --out "$directory" > "$out/$name.blender.log" 2>&1
+        --frames "$range" --res "$res" --out "$directory" "$@" > "$out/$name.blender.log" 2>&1
     read -r wall user sys < "$out/$name.time"
-    echo "$name: ${spp} spp seed $seed, wall ${wall} s, cpu $(echo "$user + $sys" | bc) s," \
+    echo "$name: ${spp} spp seed $seed frames $range $*, wall ${wall} s, cpu $(echo "$user + $sys" | bc) s," \
         "load before $load_before, after $(cut -d' ' -f1-3 /proc/loadavg)" >> "$log"
     touch "$directory/done"
 }
 
-variant noisy 4 1
-variant ref_a "$ref_spp" 7
-variant ref_b "$ref_spp" 8
+variant noisy 4 1 "$frames"
+variant ref_a "$ref_spp" 7 "$frames"
+variant ref_b "$ref_spp" 8 "$frames"
+variant without "$ref_spp" 9 20-29 --without-crosser
 cat "$log"
