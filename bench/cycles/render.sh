@@ -9,7 +9,8 @@
 # Writes OUTDIR/{noisy,ref_a,ref_b,without}/frame.####.exr, a timing.json in each, and
 # OUTDIR/render.log (one line per variant: wall and CPU seconds, load average).
 # Environment: FRAMES (1-48), RES (128x96), REF_SPP (512). A variant that holds
-# a "done" file is kept. ~20 min on the 2-core machine of 2026-12-05 (loaded).
+# a "done" file is kept. ~22 min wall on the 2-core machine of 2026-12-05 (shared
+# with another job; ~5.5 s per 512-spp frame unloaded).
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 out=${1:?usage: render.sh OUTDIR}
