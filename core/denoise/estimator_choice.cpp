@@ -243,7 +243,7 @@ namespace {
 // Every plane of one strip's choice, kept per thread from strip to strip (fresh
 // pages would cost the kernel's zeroing every time).
 struct Workspace {
-    Plane residual, high_pass, variance;
+    Plane residual, high_pass, variance, below, below_mean, noise_scale, noise_scale_mean;
     std::array<Plane, 2> blurred;
     std::array<Plane, kEstimators> sure, sure_squared, difference, difference_squared;
     std::array<Plane, kEstimators> sure_mean, sure_square_mean, difference_mean, difference_square_mean,
@@ -265,6 +265,9 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
     auto input_at = [&](int y) { return frame.input + (y - frame.input_begin) * row_samples; };
     auto rebuilt_at = [&](int y) { return frame.rebuilt + (y - frame.rebuilt_begin) * row_samples; };
+    auto noise_variance_at = [&](int y) {
+        return frame.noise_variance + (y - frame.rebuilt_begin) * row_samples;
+    };
     auto kept_at = [&](int y, std::int64_t i) {
         return frame.kept_noise ? frame.kept_noise[(y - frame.rebuilt_begin) * row_samples + i]
                                 : frame.leverage;
@@ -378,6 +381,32 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             box(difference_squared[k], radius, difference_square_mean[k]);
         }
 
+    // The one-sided test's planes: per pixel the channel mean of min(input −
+    // rebuild, 0) and of the noise's standard deviation, then their 3×3 means.
+    const bool below_test = frame.noise_variance != nullptr && (options.input || options.spatial);
+    if (below_test) {
+        Plane &below = work.below, &noise_scale = work.noise_scale;
+        const int first = std::max(0, row - 1), last = std::min(height, end + 1);
+        below.reset(first, last, width, 1), noise_scale.reset(first, last, width, 1);
+        for (int y = first; y < last; ++y) {
+            const float *input = input_at(y), *rebuilt = rebuilt_at(y), *noise = noise_variance_at(y);
+            for (int x = 0; x < width; ++x) {
+                double negative = 0, scale = 0;
+                for (int c = 0; c < channels; ++c) {
+                    const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
+                    negative += std::min(static_cast<double>(input[i]) - rebuilt[i], 0.0);
+                    scale += std::sqrt(std::max(static_cast<double>(noise[i]), 0.0));
+                }
+                below.row(y)[x] = static_cast<float>(negative / channels);
+                noise_scale.row(y)[x] = static_cast<float>(scale / channels);
+            }
+        }
+        box(below, 1, work.below_mean);
+        box(noise_scale, 1, work.noise_scale_mean);
+    }
+    // Half-normal moments: E[min(n, 0)] = −s/√(2π), sd = s·√(1/2 − 1/(2π)).
+    constexpr double kBelowMean = 0.3989422804014327, kBelowDeviation = 0.5838126822018446;
+
     // The choice and its sigma at the band's own rows.
     ChoiceCounts counts;
     const double z = options.significance;
@@ -406,6 +435,18 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 if (significant(mean, mean, difference_square_mean[k].row(y)[x]) &&
                     (chosen == 0 || local < least))
                     chosen = k, least = local;
+            }
+            if (chosen == 0 && below_test) {
+                const int near = (std::min(height - 1, y + 1) - std::max(0, y - 1) + 1) *
+                                 (std::min(width - 1, x + 1) - std::max(0, x - 1) + 1);
+                const double scale = work.noise_scale_mean.row(y)[x];
+                const double excess = work.below_mean.row(y)[x] + kBelowMean * scale;
+                if (excess < 0 && excess * excess * near > options.below_significance *
+                                                               options.below_significance * kBelowDeviation *
+                                                               kBelowDeviation * scale * scale)
+                    for (int k = 1; k < kEstimators; ++k)
+                        if (used[k] && (chosen == 0 || local_sure[k].row(y)[x] < least))
+                            chosen = k, least = local_sure[k].row(y)[x];
             }
             // Sigma: the chosen one's variance part, plus its pooled SURE's excess where significant.
             double floor_mean = 0;

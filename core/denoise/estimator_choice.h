@@ -25,6 +25,19 @@
 // bench/results/estimators.md: it made the indirect light 2–3× worse). Of the
 // estimators that pass, the one with the least SURE over the 3×3 pixels around
 // is taken (the narrow window sees a blur's bias at an edge).
+// The window test cannot see a failure of a few pixels: a gain carried by k
+// pixels of the window scores about √k standard errors, whatever its size (a
+// firefly is such a gain too). One kind of narrow failure can be told from
+// fireflies: the input far *below* the rebuild (a thin sliver of a moving hard
+// shadow that the rebuild fills with light seen in other frames). Render noise
+// has a bounded lower tail (values are not negative, fireflies are bright), so
+// where the 3×3 mean of min(input − rebuild, 0) lies below its mean under
+// Gaussian noise of the shot's pooled variance s² (−0.399·s) by more than z
+// (default 6) of its standard error (0.584·s/√9), the rebuild is not taken
+// there; the candidate with the least 3×3 SURE is. s² comes from the same
+// pooled high-pass as sigma's noise level, so fireflies widen it: the test is
+// conservative where the noise is heavy-tailed (it never fired on our indirect
+// light).
 // Sigma of the chosen estimator is its known variance part (the rebuild: the
 // engine's sigma²; a Gaussian: v·Σw²; the input: v), raised to its pooled SURE
 // where that is larger by z standard errors (the bias the variance part misses).
@@ -52,6 +65,9 @@ struct EstimatorOptions {
     bool spatial = false;      ///< Gaussian blurs of the input (1 and 2 px) are candidates
     double significance = 2.0; ///< z: standard errors a switch away from the rebuild needs
     int radius = 3;            ///< risk window radius (3: 7×7 pixels)
+    /// z of the one-sided test that rejects the rebuild where the input lies far
+    /// below it over 3×3 pixels, in the noise's own scale (see the file comment).
+    double below_significance = 6.0;
     bool enabled() const { return input || spatial; }
 };
 
@@ -76,6 +92,9 @@ struct ChoiceFrame {
     const float* rebuilt = nullptr;
     const float* sigma = nullptr;
     const float* kept_noise = nullptr;
+    /// The input's noise variance per sample (s², pooled over the shot, as for
+    /// sigma), same rows; null: no test of the input below the rebuild.
+    const float* noise_variance = nullptr;
     double leverage = 0;
     int rebuilt_begin = 0, rebuilt_end = 0;
 };

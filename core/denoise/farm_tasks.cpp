@@ -283,6 +283,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             frame.input = buffers.raw.data(), frame.input_begin = 0, frame.input_end = shape.height;
             frame.rebuilt = output.data(), frame.sigma = buffers.sigma.data();
             frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr;
+            frame.noise_variance = shot.noise_variance.data();
             frame.leverage = modes.leverages(t);
             frame.rebuilt_begin = 0, frame.rebuilt_end = shape.height;
             buffers.chosen.resize(static_cast<size_t>(samples)),

@@ -177,6 +177,7 @@ void RebuildPass::add_rows(int row, int end)
         choice_frame.input_begin = raw_begin, choice_frame.input_end = raw_end;
         choice_frame.rebuilt = frame_output, choice_frame.sigma = frame_sigma;
         choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;
+        choice_frame.noise_variance = rebuilder.noise_variance().data();
         choice_frame.leverage = modes.leverages(frame);
         choice_frame.rebuilt_begin = first, choice_frame.rebuilt_end = last;
         Chosen& chosen = m_chosen_of_worker.local();

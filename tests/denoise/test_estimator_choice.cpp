@@ -265,3 +265,82 @@ TEST_CASE("estimators: with --non-negative no chosen value is negative, though t
     for (const std::vector<float>& frame : chosen.sink.rebuilt)
         CHECK(*std::min_element(frame.begin(), frame.end()) >= 0.0f);
 }
+
+namespace {
+
+// One frame for choose_estimators itself: a lit wall (0.5) with Gaussian noise
+// of standard deviation `noise`, whose rebuild is the noise-free wall.
+// Returns the frame's planes; the caller changes them.
+struct WallFrame {
+    int width = 64, height = 48, channels = 3;
+    std::vector<float> input, rebuilt, sigma, noise_variance;
+    WallFrame(float noise, unsigned seed)
+    {
+        const size_t samples = static_cast<size_t>(width) * height * channels;
+        std::mt19937 generator(seed);
+        std::normal_distribution<float> normal(0.0f, noise);
+        rebuilt.assign(samples, 0.5f), sigma.assign(samples, 0.2f * noise);
+        noise_variance.assign(samples, noise * noise);
+        input.resize(samples);
+        for (size_t i = 0; i < samples; ++i)
+            input[i] = 0.5f + normal(generator);
+    }
+    size_t at(int x, int y, int c = 0) const { return (static_cast<size_t>(y) * width + x) * channels + c; }
+    // The estimator taken at each pixel, with or without the noise variance (the one-sided test).
+    std::vector<std::uint8_t> choose(bool with_noise_variance, std::vector<float>* values = nullptr) const
+    {
+        ChoiceFrame frame;
+        frame.image = {width, height, channels};
+        frame.input = input.data(), frame.input_begin = 0, frame.input_end = height;
+        frame.rebuilt = rebuilt.data(), frame.sigma = sigma.data(), frame.leverage = 0.05;
+        frame.noise_variance = with_noise_variance ? noise_variance.data() : nullptr;
+        frame.rebuilt_begin = 0, frame.rebuilt_end = height;
+        std::vector<float> chosen_values(input.size()), chosen_sigma(input.size());
+        std::vector<std::uint8_t> chosen(static_cast<size_t>(width) * height);
+        choose_estimators(parse_estimators("rebuild,input,spatial"), frame, 0, height, chosen_values.data(),
+                          chosen_sigma.data(), chosen.data());
+        if (values)
+            *values = chosen_values;
+        return chosen;
+    }
+};
+
+} // namespace
+
+TEST_CASE(
+    "estimators: a sliver of shadow the rebuild fills with light is taken from the input, a firefly is not")
+{
+    WallFrame wall(0.02f, 11);
+    // A 1 × 3 pixel sliver of shadow (the input is 0 there: no light reaches it)
+    // that the rebuild fills with the wall's 0.5, and a firefly elsewhere that
+    // the rebuild rightly leaves out. Each is too narrow for the 7×7 window test.
+    const int sliver_x = 20, firefly_x = 44, firefly_y = 30;
+    for (int y = 20; y < 23; ++y)
+        for (int c = 0; c < 3; ++c)
+            wall.input[wall.at(sliver_x, y, c)] = 0.0f;
+    for (int c = 0; c < 3; ++c)
+        wall.input[wall.at(firefly_x, firefly_y, c)] = 6.0f;
+    const std::vector<std::uint8_t> window_only = wall.choose(false);
+    std::vector<float> values;
+    const std::vector<std::uint8_t> with_test = wall.choose(true, &values);
+    auto taken = [&](const std::vector<std::uint8_t>& chosen, int x, int y) {
+        return static_cast<Estimator>(chosen[static_cast<size_t>(y) * wall.width + x]);
+    };
+    for (int y = 20; y < 23; ++y) {
+        CAPTURE(y);
+        CHECK(taken(window_only, sliver_x, y) == Estimator::Rebuild); // the window test's blind spot
+        CHECK(taken(with_test, sliver_x, y) != Estimator::Rebuild);
+        CHECK(values[wall.at(sliver_x, y)] < 0.25f); // the shadow, not the light seen in other frames
+    }
+    CHECK(taken(with_test, firefly_x, firefly_y) == Estimator::Rebuild);
+    CHECK(values[wall.at(firefly_x, firefly_y)] == doctest::Approx(0.5f));
+}
+
+TEST_CASE("estimators: on pure noise around an unbiased rebuild the one-sided test never fires")
+{
+    for (unsigned seed = 1; seed <= 4; ++seed) {
+        CAPTURE(seed);
+        WallFrame wall(0.05f, seed);
+        CHECK(wall.choose(true) == wall.choose(false));
+    }
+}
