@@ -240,6 +240,13 @@ void ChoiceCounts::add(const ChoiceCounts& other)
 
 namespace {
 
+// Pixels of the (2·radius + 1)² window around (x, y), clipped to the image.
+int clipped_window(int width, int height, int x, int y, int radius)
+{
+    return (std::min(height - 1, y + radius) - std::max(0, y - radius) + 1) *
+           (std::min(width - 1, x + radius) - std::max(0, x - radius) + 1);
+}
+
 // Every plane of one strip's choice, kept per thread from strip to strip (fresh
 // pages would cost the kernel's zeroing every time).
 struct Workspace {
@@ -265,9 +272,6 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
     auto input_at = [&](int y) { return frame.input + (y - frame.input_begin) * row_samples; };
     auto rebuilt_at = [&](int y) { return frame.rebuilt + (y - frame.rebuilt_begin) * row_samples; };
-    auto noise_variance_at = [&](int y) {
-        return frame.noise_variance + (y - frame.rebuilt_begin) * row_samples;
-    };
     auto kept_at = [&](int y, std::int64_t i) {
         return frame.kept_noise ? frame.kept_noise[(y - frame.rebuilt_begin) * row_samples + i]
                                 : frame.leverage;
@@ -382,24 +386,25 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
         }
 
     // The one-sided test's planes: per pixel the channel mean of min(input −
-    // rebuild, 0) and of the noise's standard deviation, then their 3×3 means.
-    const bool below_test = frame.noise_variance != nullptr && (options.input || options.spatial);
+    // rebuild, 0), and the noise scale; then their 3×3 means.
+    const bool below_test = frame.noise_scale != nullptr && (options.input || options.spatial);
     if (below_test) {
         Plane &below = work.below, &noise_scale = work.noise_scale;
         const int first = std::max(0, row - 1), last = std::min(height, end + 1);
         below.reset(first, last, width, 1), noise_scale.reset(first, last, width, 1);
         for (int y = first; y < last; ++y) {
-            const float *input = input_at(y), *rebuilt = rebuilt_at(y), *noise = noise_variance_at(y);
+            const float *input = input_at(y), *rebuilt = rebuilt_at(y);
             for (int x = 0; x < width; ++x) {
-                double negative = 0, scale = 0;
+                double negative = 0;
                 for (int c = 0; c < channels; ++c) {
                     const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
                     negative += std::min(static_cast<double>(input[i]) - rebuilt[i], 0.0);
-                    scale += std::sqrt(std::max(static_cast<double>(noise[i]), 0.0));
                 }
                 below.row(y)[x] = static_cast<float>(negative / channels);
-                noise_scale.row(y)[x] = static_cast<float>(scale / channels);
             }
+            const float* scale =
+                frame.noise_scale + static_cast<std::int64_t>(y - frame.rebuilt_begin) * width;
+            std::copy(scale, scale + width, noise_scale.row(y));
         }
         box(below, 1, work.below_mean);
         box(noise_scale, 1, work.noise_scale_mean);
@@ -412,9 +417,8 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     const double z = options.significance;
     std::vector<double> floor(static_cast<size_t>(channels));
     for (int y = row; y < end; ++y) {
-        const int window_rows = std::min(height - 1, y + radius) - std::max(0, y - radius) + 1;
         for (int x = 0; x < width; ++x) {
-            const int window = window_rows * (std::min(width - 1, x + radius) - std::max(0, x - radius) + 1);
+            const int window = clipped_window(width, height, x, y, radius);
             // gain > z · its standard error over the window, squared (no root per pixel).
             auto significant = [&](double gain, double mean, double square_mean) {
                 return gain > 0 && gain * gain > z * z * std::max(square_mean - mean * mean, 0.0) / window;
@@ -437,8 +441,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                     chosen = k, least = local;
             }
             if (chosen == 0 && below_test) {
-                const int near = (std::min(height - 1, y + 1) - std::max(0, y - 1) + 1) *
-                                 (std::min(width - 1, x + 1) - std::max(0, x - 1) + 1);
+                const int near = clipped_window(width, height, x, y, 1);
                 const double scale = work.noise_scale_mean.row(y)[x];
                 const double excess = work.below_mean.row(y)[x] + kBelowMean * scale;
                 if (excess < 0 && excess * excess * near > options.below_significance *
@@ -488,6 +491,16 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
 }
 
 } // namespace
+
+void noise_scale_rows(const float* noise_variance, std::int64_t pixels, int channels, float* scale)
+{
+    for (std::int64_t pixel = 0; pixel < pixels; ++pixel) {
+        double sum = 0;
+        for (int c = 0; c < channels; ++c)
+            sum += std::sqrt(std::max(static_cast<double>(noise_variance[pixel * channels + c]), 0.0));
+        scale[pixel] = static_cast<float>(sum / channels);
+    }
+}
 
 ChoiceCounts choose_estimators(const EstimatorOptions& options, const ChoiceFrame& frame, int row, int end,
                                float* values, float* sigma, std::uint8_t* chosen)

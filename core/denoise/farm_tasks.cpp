@@ -239,8 +239,13 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
         PassThroughRows pass_through;
     };
     const EstimatorOptions& estimators = settings.estimators;
-    if (estimators.enabled())
+    std::vector<float> noise_scale; // the same for every frame: made once
+    if (estimators.enabled()) {
         report.estimator_choice.assign(static_cast<size_t>(shape.frames), {});
+        noise_scale.resize(static_cast<size_t>(samples / shape.channels));
+        noise_scale_rows(shot.noise_variance.data(), samples / shape.channels, shape.channels,
+                         noise_scale.data());
+    }
     tbb::enumerable_thread_specific<Buffers> thread_buffers;
     std::mutex counts_mutex;
     tbb::parallel_for(0, static_cast<int>(written.size()), [&](int k) {
@@ -283,7 +288,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             frame.input = buffers.raw.data(), frame.input_begin = 0, frame.input_end = shape.height;
             frame.rebuilt = output.data(), frame.sigma = buffers.sigma.data();
             frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr;
-            frame.noise_variance = shot.noise_variance.data();
+            frame.noise_scale = noise_scale.data();
             frame.leverage = modes.leverages(t);
             frame.rebuilt_begin = 0, frame.rebuilt_end = shape.height;
             buffers.chosen.resize(static_cast<size_t>(samples)),

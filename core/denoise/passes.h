@@ -187,6 +187,7 @@ private:
     tbb::enumerable_thread_specific<std::vector<float>> m_kept_noise_of_worker; // one frame's
     tbb::enumerable_thread_specific<Chosen> m_chosen_of_worker;
     ScratchBuffer<float> m_raw; // the input rows the choice reads, as the source gives them
+    std::vector<float> m_noise_scale; // the choice's noise scale of the band's rebuilt rows
     std::vector<float> m_ranks;
 };
 

@@ -154,8 +154,12 @@ void RebuildPass::add_rows(int row, int end)
                       settings.non_negative_floor);
 
     const int raw_begin = std::max(0, row - input_reach), raw_end = std::min(shape.height, end + input_reach);
-    if (estimators.enabled())
+    if (estimators.enabled()) {
         m_stream.read_raw_rows(raw_begin, raw_end, data, raw);
+        m_noise_scale.resize(static_cast<size_t>(valid / shape.channels));
+        noise_scale_rows(rebuilder.noise_variance().data(), valid / shape.channels, shape.channels,
+                         m_noise_scale.data());
+    }
     const std::int64_t raw_rows = (raw_end - raw_begin) * row_samples;
     tbb::parallel_for(0, frames, [&](int frame) { // a window of the kept shot has no pass-through rows
         const PassThroughRows* pass_through =
@@ -177,7 +181,7 @@ void RebuildPass::add_rows(int row, int end)
         choice_frame.input_begin = raw_begin, choice_frame.input_end = raw_end;
         choice_frame.rebuilt = frame_output, choice_frame.sigma = frame_sigma;
         choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;
-        choice_frame.noise_variance = rebuilder.noise_variance().data();
+        choice_frame.noise_scale = m_noise_scale.data();
         choice_frame.leverage = modes.leverages(frame);
         choice_frame.rebuilt_begin = first, choice_frame.rebuilt_end = last;
         Chosen& chosen = m_chosen_of_worker.local();

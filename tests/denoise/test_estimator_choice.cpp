@@ -273,27 +273,29 @@ namespace {
 // Returns the frame's planes; the caller changes them.
 struct WallFrame {
     int width = 64, height = 48, channels = 3;
-    std::vector<float> input, rebuilt, sigma, noise_variance;
+    std::vector<float> input, rebuilt, sigma, noise_scale;
     WallFrame(float noise, unsigned seed)
     {
         const size_t samples = static_cast<size_t>(width) * height * channels;
         std::mt19937 generator(seed);
         std::normal_distribution<float> normal(0.0f, noise);
         rebuilt.assign(samples, 0.5f), sigma.assign(samples, 0.2f * noise);
-        noise_variance.assign(samples, noise * noise);
+        std::vector<float> noise_variance(samples, noise * noise);
+        noise_scale.resize(samples / channels);
+        noise_scale_rows(noise_variance.data(), samples / channels, channels, noise_scale.data());
         input.resize(samples);
         for (size_t i = 0; i < samples; ++i)
             input[i] = 0.5f + normal(generator);
     }
     size_t at(int x, int y, int c = 0) const { return (static_cast<size_t>(y) * width + x) * channels + c; }
-    // The estimator taken at each pixel, with or without the noise variance (the one-sided test).
-    std::vector<std::uint8_t> choose(bool with_noise_variance, std::vector<float>* values = nullptr) const
+    // The estimator taken at each pixel, with or without the noise scale (the one-sided test).
+    std::vector<std::uint8_t> choose(bool with_noise_scale, std::vector<float>* values = nullptr) const
     {
         ChoiceFrame frame;
         frame.image = {width, height, channels};
         frame.input = input.data(), frame.input_begin = 0, frame.input_end = height;
         frame.rebuilt = rebuilt.data(), frame.sigma = sigma.data(), frame.leverage = 0.05;
-        frame.noise_variance = with_noise_variance ? noise_variance.data() : nullptr;
+        frame.noise_scale = with_noise_scale ? noise_scale.data() : nullptr;
         frame.rebuilt_begin = 0, frame.rebuilt_end = height;
         std::vector<float> chosen_values(input.size()), chosen_sigma(input.size());
         std::vector<std::uint8_t> chosen(static_cast<size_t>(width) * height);
