@@ -352,13 +352,15 @@ TEST_CASE("denoise --update-beauty: threads, a streamed run and farm stages writ
     check_same_outputs(dir.file("t1/d"), dir.file("t2/d"));
 
     // Kept and streamed (as test_denoise_cli: without the mode filter, the budget what the
-    // kept run's program and files held plus 2.5 MB, which holds a band but not the shot).
+    // kept run's program and files held plus 2.3 MB). The plan needs 1.83 MB for a streamed
+    // 16-row band and 2.82 MB to keep the shot; 2.3 MB lies halfway, because the program's
+    // resident size, which --max-memory counts too, differs by a few 100 KB between runs.
     run_ok(denoise + "--no-mode-filter -o " + dir.file("kept/d.####.exr") + " --json " +
            dir.file("kept.json"));
     const nlohmann::json kept = load_json(dir.file("kept.json"));
     CHECK(kept["in_memory"] == true);
     run_ok(denoise + fmt::format("--no-mode-filter --max-memory {} -o {} --json {}",
-                                 kept["memory_held_bytes"].get<std::int64_t>() + 2'500'000,
+                                 kept["memory_held_bytes"].get<std::int64_t>() + 2'300'000,
                                  dir.file("streamed/d.####.exr"), dir.file("streamed.json")));
     const nlohmann::json streamed = load_json(dir.file("streamed.json"));
     CHECK(streamed["in_memory"] == false);
