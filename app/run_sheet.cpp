@@ -32,7 +32,9 @@ RunMeasurements measure_and_write_sheet(const RunSequences& sequences, const std
                                         const std::string& sheet_path)
 {
     io::SequenceReader noisy_passes(sequences.noisy, kPassLayers), noisy_beauty(sequences.noisy, {"Combined"});
-    io::SequenceReader denoised_indirect(sequences.denoised, {"DiffInd"});
+    // The denoised beauty from the denoised passes (DiffDir is denoised too), so
+    // that it differs from the final one by what refine did alone.
+    io::SequenceReader denoised_passes(sequences.denoised, kPassLayers);
     io::SequenceReader final_beauty(sequences.final_frames, {"Combined"}),
         final_indirect(sequences.final_frames, {"DiffInd"});
     std::unique_ptr<io::SequenceReader> reference_beauty, reference_indirect;
@@ -52,12 +54,16 @@ RunMeasurements measure_and_write_sheet(const RunSequences& sequences, const std
         if (!on_sheet && !reference_beauty)
             continue;
         std::vector<float> passes = read_frame(noisy_passes, i);
+        std::vector<float> denoised = read_frame(denoised_passes, i);
         std::vector<float> indirect[3] = {std::vector<float>(passes.size() / 4),
-                                          read_frame(denoised_indirect, i), read_frame(final_indirect, i)};
+                                          std::vector<float>(passes.size() / 4),
+                                          read_frame(final_indirect, i)};
         for (std::size_t p = 0; p < indirect[0].size() / 3; ++p)
-            for (int c = 0; c < 3; ++c)
+            for (int c = 0; c < 3; ++c) {
                 indirect[0][p * 3 + c] = passes[p * 12 + 6 + c];
-        std::vector<float> beauty[3] = {read_frame(noisy_beauty, i), composite(passes, indirect[1].data()),
+                indirect[1][p * 3 + c] = denoised[p * 12 + 6 + c];
+            }
+        std::vector<float> beauty[3] = {read_frame(noisy_beauty, i), composite(denoised, nullptr),
                                         read_frame(final_beauty, i)};
         std::vector<float> reference_rgb;
         if (reference_beauty) {
