@@ -68,13 +68,23 @@ Subcommand add_refine_command(CLI::App& parent)
                         "independent of the noisy pass)");
     command->add_option("--max-depth", options->settings.render.max_depth, "Maximum number of bounces")
         ->check(kAtLeastOne);
-    auto* threshold = command->add_option(
-        "--threshold", options->threshold,
-        "Re-render pixels whose sigma / sqrt(value^2 + floor^2) is at least this (largest over R, G, B)");
+    auto* threshold =
+        command
+            ->add_option(
+                "--threshold", options->threshold,
+                "Re-render pixels whose sigma / sqrt(value^2 + floor^2) is at least this (largest over "
+                "R, G, B; default 0.2)")
+            ->check(CLI::PositiveNumber);
+    command->add_flag(
+        "--by-gain", options->by_gain,
+        "Instead of --threshold: re-render the pixels where that removes more relMSE (by sigma) "
+        "than the same samples spread over the shot as more spp would (needs <layer>Var and the "
+        "input's spp, as modestack's renders write them)");
     command
-        ->add_option("--budget", options->budget_percent,
-                     "Instead of --threshold: re-render the P % of the shot's pixels with the largest score "
-                     "(before dilation; 0 = nothing)")
+        ->add_option(
+            "--budget", options->budget_percent,
+            "Instead of --threshold: re-render the P % of the shot's pixels with the largest relative "
+            "sigma (before dilation; 0 = nothing)")
         ->check(CLI::Range(0.0, 100.0))
         ->excludes(threshold);
     command

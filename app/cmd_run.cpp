@@ -51,6 +51,7 @@ struct RunOptions {
     int refine_spp = 256;
     double budget_percent = 2.0;
     double threshold = -1; ///< > 0: use it instead of the budget
+    bool by_gain = false;  ///< --by-gain instead of the budget
     int reference_spp = 0;
     double exposure = 0.0;
     std::string display;
@@ -159,6 +160,8 @@ int run_run(const RunOptions& options)
     refine_options.settings.render.spp = options.refine_spp;
     if (options.threshold > 0)
         refine_options.threshold = options.threshold;
+    else if (options.by_gain)
+        refine_options.by_gain = true;
     else
         refine_options.budget_percent = options.budget_percent;
     const RefineResult refine_result = refine(make_refine_job(refine_options), options.common);
@@ -200,8 +203,8 @@ int run_run(const RunOptions& options)
     summary["rank"] = kept_modes;
     summary["rank_rule"] = denoise_result.report.rank_decision.rule;
     summary["direct_rank"] = denoise_result.report.layers.at(1).rank_decision.kept_modes;
-    const bool by_budget = refine_result.budget_percent >= 0;
-    summary["refine_selection"] = by_budget ? "budget" : "threshold";
+    const bool by_budget = refine_result.selection == RefineSelection::Budget;
+    summary["refine_selection"] = selection_name(refine_result.selection);
     summary["refine_budget_percent"] = by_budget ? Json(refine_result.budget_percent) : Json();
     summary["refine_threshold"] = std::isfinite(refine_result.threshold) ? Json(refine_result.threshold) : Json();
     summary["pixels_refined"] = refine_result.pixels_rendered;
@@ -281,11 +284,19 @@ Subcommand add_run_command(CLI::App& parent)
                        ->add_option("--budget", options->budget_percent,
                                     "Re-render this % of the shot's pixels (the most unsure ones)")
                        ->check(CLI::Range(0.0, 100.0));
+    auto* threshold =
+        command
+            ->add_option("--threshold", options->threshold,
+                         "Instead of --budget: re-render pixels whose relative sigma is at least this")
+            ->check(CLI::PositiveNumber)
+            ->excludes(budget);
     command
-        ->add_option("--threshold", options->threshold,
-                     "Instead of --budget: re-render pixels whose relative sigma is at least this")
-        ->check(CLI::PositiveNumber)
-        ->excludes(budget);
+        ->add_flag(
+            "--by-gain", options->by_gain,
+            "Instead of --budget: refine's --by-gain (re-render where that removes more error than the "
+            "same samples spread over the shot)")
+        ->excludes(budget)
+        ->excludes(threshold);
     command
         ->add_option("--reference-spp", options->reference_spp,
                      "Also render a reference at this spp and measure relMSE, equivalent spp and speed-up "

@@ -174,7 +174,7 @@ RefineMasksResult refine_masks_only(const RefineJob& job, const CommonOptions& c
 
     RunContext context(context_options);
     double seconds_scoring = 0;
-    const float threshold = job.budget_percent >= 0
+    const float threshold = job.selection == RefineSelection::Budget
                                 ? budget_threshold(reader, job.budget_percent, job.settings.dark_floor,
                                                    context.progress(), seconds_scoring)
                                 : static_cast<float>(job.threshold);
@@ -199,9 +199,9 @@ RefineMasksResult refine_masks_only(const RefineJob& job, const CommonOptions& c
         MaskedFrame frame;
         frame.frame = input.frames[i];
         frame.mask_file = masks.files[i];
-        frame.report = refine::choose_refine_pixels(width, height, threshold, job.settings.dark_floor,
-                                                    job.settings.feather, layer.value.data(),
-                                                    layer.sigma.data(), weights.data());
+        frame.report =
+            refine::choose_refine_pixels(width, height, threshold, job.settings, layer.value.data(),
+                                         layer.sigma.data(), nullptr, weights.data());
         add_mask_output(outputs, masks.files[i], weights, width, height, attributes);
         for (std::size_t p = 0; p < pixels; ++p)
             mask[p] = weights[p] > 0 ? 1 : 0;
@@ -222,6 +222,7 @@ RefineMasksResult refine_masks_only(const RefineJob& job, const CommonOptions& c
     result.layer = reader.layers().front().name;
     result.width = width;
     result.height = height;
+    result.selection = job.selection;
     result.budget_percent = job.budget_percent;
     result.threshold = threshold;
     result.settings = job.settings;
@@ -243,8 +244,8 @@ nlohmann::ordered_json refine_windows_json(const RefineMasksResult& result)
     json["layer"] = result.layer;
     json["width"] = result.width;
     json["height"] = result.height;
-    const bool by_budget = result.budget_percent >= 0;
-    json["selection"] = by_budget ? "budget" : "threshold";
+    const bool by_budget = result.selection == RefineSelection::Budget;
+    json["selection"] = selection_name(result.selection);
     json["budget_percent"] =
         by_budget ? nlohmann::ordered_json(result.budget_percent) : nlohmann::ordered_json();
     json["threshold"] =

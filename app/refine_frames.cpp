@@ -2,6 +2,7 @@
 
 #include "app/command.h"
 #include "core/common/error.h"
+#include "core/refine/blend.h"
 #include "core/refine/selection.h"
 #include "io/frame_header.h"
 #include "io/layers.h"
@@ -87,6 +88,49 @@ float budget_threshold(const io::SequenceReader& reader, double budget_percent, 
     progress.end();
     seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return histogram.threshold_for_fraction(budget_percent / 100.0);
+}
+
+float gain_threshold_of_shot(const io::SequenceReader& reader, const refine::RefineSettings& settings,
+                             Progress& progress, double& seconds)
+{
+    auto start = std::chrono::steady_clock::now();
+    const std::size_t pixels = static_cast<std::size_t>(reader.width()) * reader.height();
+    LayerAndSigma frame(pixels);
+    double sum = 0;
+    progress.begin("estimating the shot's error", reader.frame_count());
+    for (int i = 0; i < reader.frame_count(); ++i) {
+        throw_if_cancelled();
+        frame.read(reader, i);
+        sum += refine::estimated_relative_mse(frame.value.data(), frame.sigma.data(), pixels, 3,
+                                              settings.dark_floor);
+        progress.advance();
+    }
+    progress.end();
+    seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return refine::gain_threshold(sum / reader.frame_count(), settings.input_spp, settings.render.spp);
+}
+
+int recorded_input_spp(const std::string& file, const std::string& layer)
+{
+    const io::FrameHeader header = io::read_frame_header(file);
+    bool has_variance = false;
+    for (const auto& group : io::group_layers(io::channels_as_read(header)))
+        has_variance = has_variance || layer_is(group.name, layer + "Var");
+    if (!has_variance)
+        throw bad_input(file,
+                        fmt::format("no {}Var channels (the input's variance): refine chooses pixels by "
+                                    "gain from them; pass --threshold or --budget",
+                                    layer));
+    for (const auto& [name, value] : header.attributes)
+        if (name == "modestack:spp") {
+            // Attribute values read "type value": the number is the last word.
+            const int spp = std::atoi(value.substr(value.find_last_of(' ') + 1).c_str());
+            if (spp >= 1)
+                return spp;
+            throw bad_input(file, fmt::format("modestack:spp is {}: not a sample count", value));
+        }
+    throw bad_input(file, "no modestack:spp attribute (the input's samples per pixel): refine chooses pixels "
+                          "by gain from it; pass --threshold or --budget");
 }
 
 void add_mask_output(std::vector<std::unique_ptr<io::FrameOutput>>& outputs, const std::string& file,

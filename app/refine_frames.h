@@ -1,11 +1,13 @@
 // What the three modes of `modestack refine` share (refine_job.h): the check
 // that a sequence is a denoiser's output with sigma, the frame-by-frame buffers
-// of the layer and its sigma, the shot-wide --budget threshold, and the mask
+// of the layer and its sigma, the shot-wide --budget and --by-gain thresholds
+// (and the input's spp the latter needs), and the mask
 // frames refine writes. One place for each, so that the in-process refine,
 // --masks-only and --blend read, choose and write alike.
 #pragma once
 
 #include "core/common/progress.h"
+#include "core/refine/refine_frame.h"
 #include "io/frame_output.h"
 #include "io/sequence_reader.h"
 
@@ -39,6 +41,18 @@ struct LayerAndSigma {
 /// `budget_percent` % of the shot's pixels (selection.h). Adds its wall time to `seconds`.
 float budget_threshold(const io::SequenceReader& reader, double budget_percent, float dark_floor,
                        Progress& progress, double& seconds);
+
+/// Refine by gain: one read of every frame for the relMSE that sigma predicts
+/// over the shot, and from it the least gain a re-render pays for
+/// (refine::gain_threshold). Adds its wall time to `seconds`.
+float gain_threshold_of_shot(const io::SequenceReader& reader, const refine::RefineSettings& settings,
+                             Progress& progress, double& seconds);
+
+/// Refine by gain: the input's spp that `file` records (modestack:spp, which
+/// modestack's renders write and denoise keeps) after checking that it has the
+/// input's variance `<layer>Var`. Throws a bad-input error naming the file,
+/// and saying to pass --threshold or --budget, when either is missing.
+int recorded_input_spp(const std::string& file, const std::string& layer);
 
 /// Appends to `outputs` the mask frame of `weights` (width·height): channel
 /// "mask" (half, 1 where weight > 0: to be re-rendered; what `render --mask`

@@ -1,7 +1,8 @@
 // `modestack refine` as a library call (refine_job.h): re-render what the
 // denoiser is unsure of ([0088]–[0095]). Reads the denoised indirect layer and
 // its sigma channels, selects the pixels with a high relative error (a fixed
-// threshold, or the budget's P % worst pixels of the whole shot), grows and
+// threshold, or the budget's P % worst pixels of the whole shot) or, with
+// --by-gain, those where a re-render pays for its samples, grows and
 // feathers the selection, re-renders those pixels at high spp with the built-in
 // tracer (core/render, no subprocess) and blends them in. Every other channel,
 // Combined included, is copied untouched: the final beauty is composited by
@@ -52,6 +53,19 @@ void check_denoised_header(const std::string& file, const std::string& layer)
 
 }  // namespace
 
+const char* selection_name(RefineSelection selection)
+{
+    switch (selection) {
+    case RefineSelection::Threshold:
+        return "threshold";
+    case RefineSelection::Budget:
+        return "budget";
+    case RefineSelection::Gain:
+        return "gain";
+    }
+    return "?";
+}
+
 RefineJob make_refine_job(const RefineCommandOptions& options)
 {
     RefineJob job;
@@ -89,7 +103,7 @@ RefineJob make_refine_job(const RefineCommandOptions& options)
     refine::validate_feather_options(job.settings.feather);
     if (options.budget_percent > 100)
         throw usage_error("--budget is a percentage of the shot's pixels: 0 to 100");
-    if (!(options.threshold > 0))
+    if (options.threshold < 0)
         throw usage_error("--threshold must be above 0 (a relative error, e.g. 0.2)");
     if (job.mode == RefineMode::Render) {
         parse_image_size(options.size, job.settings.render.width, job.settings.render.height);
@@ -106,7 +120,16 @@ RefineJob make_refine_job(const RefineCommandOptions& options)
     job.layer = options.layer;
     job.masks = options.masks;
     job.exr_codec = options.exr_codec;
-    job.threshold = options.threshold;
+    if ((options.budget_percent >= 0) + (options.threshold > 0) + options.by_gain > 1)
+        throw usage_error(
+            "--threshold, --budget and --by-gain are three ways to choose the pixels: give one");
+    if (options.by_gain && job.mode != RefineMode::Render)
+        throw usage_error(
+            "--by-gain weighs the built-in re-render's samples: not with --masks-only or --blend");
+    job.selection = options.budget_percent >= 0 ? RefineSelection::Budget
+                    : options.by_gain           ? RefineSelection::Gain
+                                                : RefineSelection::Threshold;
+    job.threshold = options.threshold > 0 ? options.threshold : kDefaultRefineThreshold;
     job.budget_percent = options.budget_percent;
     job.windows = options.windows;
     job.window_overhead = options.window_overhead;
@@ -143,10 +166,19 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
 
     RunContext context(context_options);
     double seconds_scoring = 0;
-    const float threshold = job.budget_percent >= 0
-                                ? budget_threshold(reader, job.budget_percent, job.settings.dark_floor,
-                                                   context.progress(), seconds_scoring)
-                                : static_cast<float>(job.threshold);
+    refine::RefineSettings settings = job.settings;
+    std::unique_ptr<io::SequenceReader> variance_reader; // Gain: the input's variance of the mean
+    float threshold = static_cast<float>(job.threshold);
+    if (job.selection == RefineSelection::Budget) {
+        threshold = budget_threshold(reader, job.budget_percent, settings.dark_floor, context.progress(),
+                                     seconds_scoring);
+    } else if (job.selection == RefineSelection::Gain) {
+        settings.score = refine::RefineScore::Gain;
+        settings.input_spp = recorded_input_spp(input.files.front(), job.layer);
+        variance_reader = std::make_unique<io::SequenceReader>(
+            input, std::vector<std::string>{job.layer + "Var"}, job.exr_codec);
+        threshold = gain_threshold_of_shot(reader, settings, context.progress(), seconds_scoring);
+    }
 
     const int width = reader.width(), height = reader.height();
     const std::size_t pixels = static_cast<std::size_t>(width) * height;
@@ -156,12 +188,13 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
         io::HeaderAttribute::of_text("modestack:command", command_line()),
         io::HeaderAttribute::of_text("modestack:scene", job.scene),
         io::HeaderAttribute::of_integer("modestack:refine_spp", render_options.spp),
+        io::HeaderAttribute::of_text("modestack:refine_selection", selection_name(job.selection)),
         io::HeaderAttribute::of_real("modestack:refine_threshold", threshold),
     };
     std::vector<std::unique_ptr<io::FrameOutput>> outputs;
     RefineResult result;
     LayerAndSigma layer(pixels);
-    std::vector<float> weights(pixels);
+    std::vector<float> weights(pixels), variance(variance_reader ? pixels * 3 : 0);
     std::vector<unsigned char> native;
     double render_seconds = 0, estimated_before = 0, estimated_after = 0;
     context.progress().begin(fmt::format("re-rendering unsure pixels of {} frames at {} spp",
@@ -172,9 +205,12 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
         throw_if_cancelled();
         const int frame = input.frames[i];
         layer.read(reader, i);
-        refine::FrameRefineReport report =
-            refine::refine_frame(scene::make_builtin_scene(job.scene, frame), frame, threshold, job.settings,
-                                 layer.value.data(), layer.sigma.data(), weights.data(), context.progress());
+        if (variance_reader)
+            variance_reader->read_selected(i, 0, height, variance.data());
+        refine::FrameRefineReport report = refine::refine_frame(
+            scene::make_builtin_scene(job.scene, frame), frame, threshold, settings, layer.value.data(),
+            layer.sigma.data(), variance_reader ? variance.data() : nullptr, weights.data(),
+            context.progress());
         layer.store();
         reader.read_native(i, 0, height, native);
         outputs.push_back(std::make_unique<io::FrameOutput>(
@@ -202,8 +238,10 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
     result.frames = input.frames;
     result.layer = reader.layers().front().name;
     result.spp = render_options.spp;
+    result.selection = job.selection;
     result.budget_percent = job.budget_percent;
     result.threshold = threshold;
+    result.input_spp = settings.input_spp;
     result.dilate = job.settings.feather.dilation;
     result.feather = job.settings.feather.feather;
     result.percent_rendered = 100.0 * static_cast<double>(result.pixels_rendered) / total_pixels;
@@ -226,9 +264,11 @@ nlohmann::ordered_json refine_json(const RefineResult& result)
     json["frames"] = io::describe_frames(result.frames);
     json["layer"] = result.layer;
     json["spp"] = result.spp;
-    const bool by_budget = result.budget_percent >= 0;
-    json["selection"] = by_budget ? "budget" : "threshold";
+    const bool by_budget = result.selection == RefineSelection::Budget;
+    json["selection"] = selection_name(result.selection);
     json["budget_percent"] = by_budget ? nlohmann::ordered_json(result.budget_percent) : nlohmann::ordered_json();
+    json["input_spp"] = result.selection == RefineSelection::Gain ? nlohmann::ordered_json(result.input_spp)
+                                                                  : nlohmann::ordered_json();
     json["threshold"] =
         std::isfinite(result.threshold) ? nlohmann::ordered_json(result.threshold) : nlohmann::ordered_json();
     json["dilate"] = result.dilate;

@@ -30,6 +30,19 @@ inline constexpr std::int64_t kDefaultWindowOverheadPixels = 64 * 64;
 /// In a --blend pattern, the index of a crop window in --windows (one file per window).
 inline constexpr const char* kWindowToken = "{window}";
 
+/// --threshold when no other selection is given.
+inline constexpr double kDefaultRefineThreshold = 0.2;
+
+/// How refine picks its pixels (core/refine/selection.h).
+enum class RefineSelection {
+    Threshold, ///< --threshold (the default): relative sigma at least this
+    Budget,    ///< --budget: the P % of the shot's pixels with the largest relative sigma
+    Gain,      ///< --by-gain: where a re-render removes more error than its samples spread over the shot
+};
+
+/// "gain", "threshold" or "budget", as the JSON summaries say.
+const char* selection_name(RefineSelection selection);
+
 /// Which half of the refine loop a run does.
 enum class RefineMode {
     Render,    ///< choose, re-render with the built-in tracer, blend (one run)
@@ -51,8 +64,9 @@ struct RefineCommandOptions {
     std::string size = "320x240";
     std::string layer = "DiffInd";
     std::string masks;
-    double threshold = 0.2;
-    double budget_percent = -1;  ///< < 0: use the threshold
+    double threshold = 0; ///< > 0: select by it (--threshold); neither this, --budget nor --by-gain: 0.2
+    double budget_percent = -1; ///< ≥ 0: select by it (--budget)
+    bool by_gain = false;       ///< --by-gain
     refine::RefineSettings settings;
     io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;  ///< --exr-codec
     bool masks_only = false;                            ///< --masks-only
@@ -73,8 +87,9 @@ struct RefineJob {
     std::string size;      ///< as typed, for messages
     std::string layer;
     std::string masks;     ///< "" = no mask output
-    double threshold = 0;
-    double budget_percent = -1;  ///< < 0: use the threshold
+    RefineSelection selection = RefineSelection::Threshold;
+    double threshold = 0;       ///< Threshold
+    double budget_percent = -1; ///< Budget
     refine::RefineSettings settings;
     io::ExrCodec exr_codec = io::ExrCodec::Libdeflate;  ///< --exr-codec
     RefineMode mode = RefineMode::Render;
@@ -99,8 +114,10 @@ struct RefineResult {
     std::vector<int> frames;
     std::string layer;   ///< the layer as found in the files
     int spp = 0;
-    double budget_percent = -1;  ///< < 0: selected by threshold
-    float threshold = 0;         ///< the threshold used (+inf: nothing selected)
+    RefineSelection selection = RefineSelection::Threshold;
+    double budget_percent = -1; ///< Budget: the percentage
+    float threshold = 0;        ///< the threshold used, of the selection's score (+inf: nothing selected)
+    int input_spp = 0;          ///< Gain: the input's spp the frames record
     int dilate = 0;
     int feather = 0;
     std::int64_t pixels_selected = 0;
@@ -130,6 +147,7 @@ struct RefineMasksResult {
     std::vector<int> frames;
     std::string layer;
     int width = 0, height = 0;
+    RefineSelection selection = RefineSelection::Threshold;
     double budget_percent = -1;
     float threshold = 0;
     refine::RefineSettings settings; ///< floor and feather used
@@ -163,7 +181,7 @@ struct RefineBlendResult {
 
 /// The validation step of `refine`: usage errors for a missing --scene,
 /// --denoised or -o, a bad size, spp, depth, dilation or feather, a budget over
-/// 100 %, a threshold not above 0, an unknown scene; for --masks-only a missing
+/// 100 %, a negative threshold, an unknown scene; for --masks-only a missing
 /// --masks or a -o; for --blend a missing --masks or -o, or selection options.
 RefineJob make_refine_job(const RefineCommandOptions& options);
 

@@ -4,6 +4,12 @@
 
 namespace modestack::refine {
 
+double rendered_share(double denoised_variance, double rendered_variance)
+{
+    const double total = denoised_variance + rendered_variance;
+    return total > 0 ? denoised_variance / total : 1.0;
+}
+
 void blend_refined(const float* weights, std::size_t pixels, int channels, const float* rendered,
                    const float* rendered_variance, float* value, float* sigma)
 {
@@ -17,8 +23,7 @@ void blend_refined(const float* weights, std::size_t pixels, int channels, const
             denoised_variance += static_cast<double>(sigma[i]) * sigma[i];
             rendered_mean_variance += std::fmax(0.0, rendered_variance[i]);
         }
-        if (denoised_variance + rendered_mean_variance > 0)
-            w *= denoised_variance / (denoised_variance + rendered_mean_variance);
+        w *= rendered_share(denoised_variance, rendered_mean_variance);
         for (int c = 0; c < channels; ++c) {
             std::size_t i = p * channels + c;
             double old_sigma = sigma[i];

@@ -15,6 +15,11 @@
 
 namespace modestack::refine {
 
+/// The re-render's share of a pixel where its weight is 1: s / (s + r), from
+/// the sums over the pixel's channels of sigma² (s) and of the rendered
+/// variance (r); 1 where both are 0.
+double rendered_share(double denoised_variance, double rendered_variance);
+
 /// For each of `pixels` pixels with weights[p] > 0, w = weights[p] · s / (s + r)
 /// (s, r: the pixel's channel means of sigma² and rendered_variance; w =
 /// weights[p] where both are 0), and each of `channels` channels:

@@ -20,12 +20,26 @@
 
 namespace modestack::refine {
 
+/// What a pixel's score is (selection.h).
+enum class RefineScore {
+    RelativeError, ///< sigma / sqrt(value² + floor²), the largest over R, G, B
+    Gain,          ///< the relMSE a re-render at render.spp removes
+};
+
 /// Every setting of a refine run except the selection threshold.
 struct RefineSettings {
     float dark_floor = kDefaultDarkFloor; ///< see selection.h
     FeatherOptions feather;
     render::RenderOptions render; ///< size, spp (high, e.g. 256), seed, depth of the re-render
+    RefineScore score = RefineScore::RelativeError;
+    int input_spp = 0; ///< Gain: the spp of the denoised frames' input (their variance's)
 };
+
+/// Writes the score of every one of `pixels` pixels into `scores`, as
+/// settings.score says, from the denoised `value` and `sigma` and (for Gain)
+/// the input's variance of the mean `variance` (pixels·3 floats each).
+void refine_scores(const RefineSettings& settings, const float* value, const float* sigma,
+                   const float* variance, std::size_t pixels, float* scores);
 
 /// What refine_frame() did to one frame.
 struct FrameRefineReport {
@@ -39,13 +53,14 @@ struct FrameRefineReport {
 };
 
 /// The pixel-choice rule of refine: scores `value` and `sigma` (width·height·3
-/// floats, interleaved, y = 0 at the top), selects the pixels with a score ≥
+/// floats, interleaved, y = 0 at the top; `variance` too for RefineScore::Gain,
+/// else it may be null) as refine_scores does, selects the pixels with a score ≥
 /// `threshold` (selection.h; +infinity selects none), drops lone ones, and
 /// writes the feathered blend weight of every pixel into `weights`
 /// (width·height; > 0 = to be re-rendered). Fills the report's pixels,
 /// selected_pixels, rendered_pixels and estimated_before (= estimated_after).
-FrameRefineReport choose_refine_pixels(int width, int height, float threshold, float dark_floor,
-                                       const FeatherOptions& feather, const float* value, const float* sigma,
+FrameRefineReport choose_refine_pixels(int width, int height, float threshold, const RefineSettings& settings,
+                                       const float* value, const float* sigma, const float* variance,
                                        float* weights);
 
 /// The blend of refine: puts re-rendered values (`rendered`, and the renderer's
@@ -56,7 +71,8 @@ void blend_refined_frame(const float* weights, const float* rendered, const floa
                          float dark_floor, float* value, float* sigma, FrameRefineReport& report);
 
 /// Refines frame `frame` of `scene` in place. `value` and `sigma` hold the
-/// denoised DiffInd RGB and its sigma (width·height·3 floats, interleaved,
+/// denoised DiffInd RGB and its sigma, `variance` the input's DiffIndVar (for
+/// RefineScore::Gain; else it may be null) (width·height·3 floats, interleaved,
 /// y = 0 at the top, size from settings.render); `weights` (width·height) receives
 /// the blend weight of every pixel (0 = untouched, bit for bit). Pixels with a
 /// score ≥ `threshold` (selection.h) are selected, lone ones dropped; +infinity selects none and then
@@ -64,7 +80,7 @@ void blend_refined_frame(const float* weights, const float* rendered, const floa
 /// (render::tile_count) whether or not anything is rendered. Throws what
 /// render_frame throws (bad options, cancellation).
 FrameRefineReport refine_frame(const scene::Scene& scene, int frame, float threshold,
-                               const RefineSettings& settings, float* value, float* sigma, float* weights,
-                               Progress& progress);
+                               const RefineSettings& settings, float* value, float* sigma,
+                               const float* variance, float* weights, Progress& progress);
 
 } // namespace modestack::refine

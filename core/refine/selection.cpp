@@ -1,5 +1,7 @@
 #include "core/refine/selection.h"
 
+#include "core/refine/blend.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -53,6 +55,43 @@ void relative_error_scores(const float* value, const float* sigma, std::size_t p
         }
         scores[p] = score;
     }
+}
+
+void refine_gains(const float* value, const float* sigma, const float* input_variance, double variance_scale,
+                  std::size_t pixels, int channels, float dark_floor, float* gains)
+{
+    const double floor_squared = static_cast<double>(dark_floor) * dark_floor;
+    for (std::size_t p = 0; p < pixels; ++p) {
+        const float* v = value + p * channels;
+        const float* s = sigma + p * channels;
+        const float* r = input_variance + p * channels;
+        double denoised = 0, rendered = 0;
+        bool finite = true;
+        for (int c = 0; c < channels; ++c) {
+            finite = finite && std::isfinite(s[c]) && std::isfinite(r[c]);
+            denoised += static_cast<double>(s[c]) * s[c];
+            rendered += std::fmax(0.0, r[c] * variance_scale);
+        }
+        if (!finite) {
+            gains[p] = std::numeric_limits<float>::infinity();
+            continue;
+        }
+        const double w = rendered_share(denoised, rendered);
+        double gain = 0;
+        for (int c = 0; c < channels; ++c) {
+            const double before = static_cast<double>(s[c]) * s[c];
+            const double after = w * w * std::fmax(0.0, r[c] * variance_scale) + (1 - w) * (1 - w) * before;
+            gain += (before - after) / (static_cast<double>(v[c]) * v[c] + floor_squared);
+        }
+        const double mean = gain / channels;
+        gains[p] = std::isfinite(mean) ? static_cast<float>(mean) : std::numeric_limits<float>::infinity();
+    }
+}
+
+float gain_threshold(double shot_relative_mse, int input_spp, int refine_spp)
+{
+    const double threshold = static_cast<double>(refine_spp) / input_spp * shot_relative_mse;
+    return threshold > 0 ? static_cast<float>(threshold) : std::numeric_limits<float>::infinity();
 }
 
 ScoreHistogram::ScoreHistogram() : m_counts(kBins, 0) {}

@@ -9,6 +9,19 @@
 // does not grow with the shot, and concentrates the budget on the frames that
 // need it (a passing object) instead of spreading it evenly over the frames.
 // Lone selected pixels are dropped (see drop_isolated_pixels).
+//
+// Or by gain per cost (--by-gain, for a re-render by modestack itself): a
+// pixel's score is the relMSE its re-render would remove, sigma² minus the
+// variance of the blend (blend.h) with a re-render whose variance is the
+// input's scaled to the refine spp, per channel over value² + floor². A pixel
+// re-rendered at S spp costs S samples. The same samples spent on the whole
+// shot as more input spp would lower its relMSE E by about E / s per sample a
+// pixel (at s input spp; a denoised shot's error falls as 1/spp where noise
+// rules it), so a pixel pays for its re-render when its gain is at least
+// (S / s) · E, E the relMSE that sigma predicts for the shot. Where bias rules
+// the error more spp everywhere buys less than that, and the rule re-renders
+// no more than it should. It is only as good as sigma: a floor in sigma² on
+// most pixels inflates E more than the gains (bench/results/refine_gain.md).
 #pragma once
 
 #include <cstddef>
@@ -25,6 +38,21 @@ inline constexpr float kDefaultDarkFloor = 0.1f;
 /// `channels` interleaved floats. Non-finite sigma counts as infinitely unsure.
 void relative_error_scores(const float* value, const float* sigma, std::size_t pixels, int channels,
                            float dark_floor, float* scores);
+
+/// Writes one score per pixel into `gains`: the relMSE a re-render removes,
+/// the channel mean of (sigma² − the blend's variance) / (value² + dark_floor²)
+/// with the re-render's variance = `input_variance` × `variance_scale` (the
+/// input's variance of the mean, times input spp / refine spp), the blend's
+/// variance as blend_refined makes it with weight 1. Non-finite sigma or
+/// variance counts as an infinite gain (as in relative_error_scores).
+void refine_gains(const float* value, const float* sigma, const float* input_variance, double variance_scale,
+                  std::size_t pixels, int channels, float dark_floor, float* gains);
+
+/// The least gain a re-render at `refine_spp` pays for on a shot rendered at
+/// `input_spp` whose predicted relMSE is `shot_relative_mse` (see above):
+/// (refine_spp / input_spp) · shot_relative_mse; +infinity (nothing) when that
+/// is not positive.
+float gain_threshold(double shot_relative_mse, int input_spp, int refine_spp);
 
 /// A histogram of scores over a whole shot, for the --budget threshold. Bins are
 /// logarithmic (ratio 1.0017 between edges) from 1e-6 to 1e6; scores outside go

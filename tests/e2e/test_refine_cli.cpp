@@ -204,6 +204,37 @@ TEST_CASE("refine leaves unweighted pixels and every other channel bit-exact, an
     CHECK(refined_pixels > 0);
 }
 
+TEST_CASE("refine --by-gain: the least gain is what the samples would buy spread over the shot, and it rises "
+          "with the refine spp")
+{
+    SwitchShot& shot = shared_shot();
+    auto at_64 = shot.refine("gain64", "--by-gain --json " + shot.dir.file("gain64.json"));
+    REQUIRE_MESSAGE(at_64.exit_code == 0, at_64.err);
+    auto at_256 =
+        run_modestack("refine --scene switch --frames 29-37 --spp 256 --by-gain -q" + shot.size +
+                      "--denoised " + shot.dir.file("denoised.####.exr") + " -o " +
+                      shot.dir.file("gain256.####.exr") + " --json " + shot.dir.file("gain256.json"));
+    REQUIRE_MESSAGE(at_256.exit_code == 0, at_256.err);
+    const auto low = nlohmann::json::parse(std::ifstream(shot.dir.file("gain64.json")));
+    const auto high = nlohmann::json::parse(std::ifstream(shot.dir.file("gain256.json")));
+    CHECK(low["selection"] == "gain");
+    CHECK(low["input_spp"] == 4); // from the frames' modestack:spp
+    // 64 spp where the input has 4: a re-rendered pixel costs what 16 more spp on one pixel
+    // of the shot would, which lower its predicted relMSE by 16 / 4 of its own.
+    const double predicted = low["estimated_relmse_before"].get<double>();
+    CHECK(low["threshold"].get<double>() == doctest::Approx(64.0 / 4 * predicted).epsilon(1e-5));
+    CHECK(high["threshold"].get<double>() == doctest::Approx(256.0 / 4 * predicted).epsilon(1e-5));
+    // Samples cost more at 256 spp than the lower noise gains: no more pixels than at 64.
+    CHECK(low["pixels_selected"].get<int>() > 0);
+    CHECK(high["pixels_selected"].get<int>() <= low["pixels_selected"].get<int>());
+    CHECK(low["estimated_relmse_after"].get<double>() < predicted);
+    for (int frame : {30, 33}) {
+        auto weight =
+            testkit::read_channels(frame_file(shot.dir, "gain64", frame), {"DiffInd.refine_weight"});
+        CHECK(std::all_of(weight.begin(), weight.end(), [](float w) { return w >= 0.0f && w <= 1.0f; }));
+    }
+}
+
 TEST_CASE("refine gives the same pixels for --threads 1 and 2")
 {
     SwitchShot& shot = shared_shot();

@@ -76,7 +76,7 @@ TEST_CASE("refine_frame blends the high-spp render into the unsure block by its 
     std::vector<float> weights(kWidth * kHeight);
     scene::Scene scene = scene::make_builtin_scene("switch", kFrame);
     FrameRefineReport report = refine_frame(scene, kFrame, 0.5f, settings, after.value.data(),
-                                            after.sigma.data(), weights.data(), Progress::silent());
+                                            after.sigma.data(), nullptr, weights.data(), Progress::silent());
     render::FrameAovs reference = render_full(32, 2);
     CHECK(report.selected_pixels == 24);
     int full = 0, partial = 0, untouched = 0;
@@ -118,9 +118,10 @@ TEST_CASE("refine_frame with nothing above the threshold renders nothing and cha
 {
     FakeDenoised before = fake_denoised(), after = before;
     std::vector<float> weights(kWidth * kHeight, -1.0f);
-    FrameRefineReport report = refine_frame(
-        scene::make_builtin_scene("switch", kFrame), kFrame, std::numeric_limits<float>::infinity(),
-        settings_for_test(), after.value.data(), after.sigma.data(), weights.data(), Progress::silent());
+    FrameRefineReport report =
+        refine_frame(scene::make_builtin_scene("switch", kFrame), kFrame,
+                     std::numeric_limits<float>::infinity(), settings_for_test(), after.value.data(),
+                     after.sigma.data(), nullptr, weights.data(), Progress::silent());
     CHECK(report.rendered_pixels == 0);
     CHECK(report.stats.paths == 0);
     CHECK(std::memcmp(after.value.data(), before.value.data(), before.value.size() * sizeof(float)) == 0);
@@ -134,11 +135,11 @@ TEST_CASE("refine_frame gives the same bits for one and two threads")
     std::vector<float> weights_one(kWidth * kHeight), weights_two(kWidth * kHeight);
     scene::Scene scene = scene::make_builtin_scene("switch", kFrame);
     tbb::task_arena(1).execute([&] {
-        refine_frame(scene, kFrame, 0.5f, settings_for_test(), one.value.data(), one.sigma.data(),
+        refine_frame(scene, kFrame, 0.5f, settings_for_test(), one.value.data(), one.sigma.data(), nullptr,
                      weights_one.data(), Progress::silent());
     });
     tbb::task_arena(2).execute([&] {
-        refine_frame(scene, kFrame, 0.5f, settings_for_test(), two.value.data(), two.sigma.data(),
+        refine_frame(scene, kFrame, 0.5f, settings_for_test(), two.value.data(), two.sigma.data(), nullptr,
                      weights_two.data(), Progress::silent());
     });
     CHECK(std::memcmp(one.value.data(), two.value.data(), one.value.size() * sizeof(float)) == 0);

@@ -2,6 +2,8 @@
 // shot-wide --budget threshold from the log histogram.
 #include "core/refine/selection.h"
 
+#include "core/refine/blend.h"
+
 #include <doctest/doctest.h>
 
 #include <algorithm>
@@ -25,6 +27,59 @@ TEST_CASE("the score is the largest relative error over the channels, judged abs
     CHECK(std::isinf(scores[2]));
     std::vector<std::uint8_t> chosen = select_pixels(scores.data(), 3, 0.2f);
     CHECK(chosen == std::vector<std::uint8_t>{0, 1, 1});
+}
+
+TEST_CASE("a pixel's gain is what the blend with a re-render removes from its predicted relMSE")
+{
+    // Pixel 0: a noise-free re-render removes all of sigma². Pixel 1: a re-render as noisy
+    // as the denoised value halves it. Pixel 2: NaN sigma, an infinite gain.
+    std::vector<float> value{1, 1, 1, 0, 0, 0, 1, 1, 1};
+    std::vector<float> sigma{0.1f, 0.1f, 0.1f, 0.2f, 0.2f, 0.2f, NAN, 0, 0};
+    std::vector<float> variance{0, 0, 0, 0.01f, 0.01f, 0.01f, 0, 0, 0}; // at the input's 4 spp
+    std::vector<float> gains(3);
+    refine_gains(value.data(), sigma.data(), variance.data(), 4.0, 3, 3, 0.1f, gains.data());
+    CHECK(gains[0] == doctest::Approx(0.01 / 1.01));
+    CHECK(gains[1] == doctest::Approx(0.5 * 0.04 / 0.01)); // 4 × 0.01 at the refine spp = sigma²
+    CHECK(std::isinf(gains[2]));
+
+    // Random pixels: the gain equals sigma² before minus sigma² after blend_refined (weight 1),
+    // over value² + floor², the channel mean.
+    std::mt19937 generator(3);
+    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+    const std::size_t pixels = 500;
+    value.resize(pixels * 3), sigma.resize(pixels * 3), variance.resize(pixels * 3), gains.resize(pixels);
+    for (std::size_t i = 0; i < pixels * 3; ++i)
+        value[i] = 2 * uniform(generator), sigma[i] = 0.3f * uniform(generator),
+        variance[i] = 0.5f * uniform(generator);
+    const double scale = 4.0 / 256.0;
+    refine_gains(value.data(), sigma.data(), variance.data(), scale, pixels, 3, 0.1f, gains.data());
+    std::vector<float> rendered(pixels * 3, 0.0f), rendered_variance(pixels * 3), weights(pixels, 1.0f);
+    for (std::size_t i = 0; i < pixels * 3; ++i)
+        rendered_variance[i] = static_cast<float>(variance[i] * scale);
+    std::vector<float> blended = value, after = sigma;
+    blend_refined(weights.data(), pixels, 3, rendered.data(), rendered_variance.data(), blended.data(),
+                  after.data());
+    for (std::size_t p = 0; p < pixels; ++p) {
+        double removed = 0, removed_variance = 0;
+        for (int c = 0; c < 3; ++c) {
+            const std::size_t i = p * 3 + c;
+            const double difference = double(sigma[i]) * sigma[i] - double(after[i]) * after[i];
+            removed += difference / (double(value[i]) * value[i] + 0.01);
+            removed_variance += difference;
+        }
+        CHECK(gains[p] == doctest::Approx(removed / 3).epsilon(1e-4));
+        // The share is the best one for the pixel's summed variance, which never grows (one
+        // channel's relative error may, where the channels' variances differ a lot).
+        CHECK(removed_variance >= -1e-9);
+    }
+}
+
+TEST_CASE("a re-render pays where its gain beats the same samples spread over the shot")
+{
+    // 256 spp where the input has 4: 64 input samples' worth a pixel, so the least gain is 64 × E.
+    CHECK(gain_threshold(0.01, 4, 256) == doctest::Approx(0.64));
+    CHECK(gain_threshold(0.01, 16, 256) == doctest::Approx(0.16));
+    CHECK(std::isinf(gain_threshold(0.0, 4, 256))); // a shot sigma calls exact: nothing
 }
 
 TEST_CASE("the budget threshold selects at most P % of the shot and misses it by less than a bin")

@@ -205,6 +205,11 @@ TEST_CASE("info, compare and refine: damaged and missing frames exit with their 
                                 "DiffInd.sigma.B"};
     testkit::write_sequence(dir.file("den.%04d.exr"), {1, 2, 3}, with_sigma, smooth_value);
     damage_exr(dir.file("den.0002.exr"), Damage::ChunkGarbage);
+    // With the input's variance but not the spp it was rendered at.
+    testkit::ExrLayout with_variance = with_sigma;
+    for (const char* channel : {"DiffIndVar.R", "DiffIndVar.G", "DiffIndVar.B"})
+        with_variance.channel_names.push_back(channel);
+    testkit::write_sequence(dir.file("var.%04d.exr"), {1, 2, 3}, with_variance, smooth_value);
 
     testkit::write_sequence(dir.file("huge.%04d.exr"), {1}, rgb_layout(), smooth_value);
     damage_exr(dir.file("huge.0001.exr"), Damage::HugeAttribute);
@@ -214,32 +219,56 @@ TEST_CASE("info, compare and refine: damaged and missing frames exit with their 
         // OpenEXR would allocate the 1.7 GB first (found by fuzz/exr_header); io/frame_header.cpp refuses it.
         {"info " + dir.file("huge.####.exr"), 1, "huge.0001.exr: damaged header: attribute"},
         // OIIO's std::regex recursed once per character: 60 kB crashed (found by fuzz/frame_range).
-        {"info " + dir.file("d." + std::string(60000, '@') + ".exr"), 2, "bytes long; a path has at most 4096"},
+        {"info " + dir.file("d." + std::string(60000, '@') + ".exr"), 2,
+         "bytes long; a path has at most 4096"},
         {"render --scene switch -o " + dir.file("out/d." + std::string(60000, '#') + ".exr"), 2,
          "output '" + dir.file("out/d.").substr(0, 40)},
         {"info " + dir.file("folder.####.exr") + " --frames 1-5", 1, "folder.0003.exr: is a directory"},
-        {"info " + dir.file(damaged_name(0) + ".####.exr"), 1, damaged_name(0) + ".0003.exr: empty file (0 bytes)"},
-        {"info " + dir.file(damaged_name(1) + ".####.exr"), 1, damaged_name(1) + ".0003.exr: cannot read image header"},
-        {"info " + dir.file(damaged_name(2) + ".####.exr"), 1, damaged_name(2) + ".0003.exr: damaged header: attribute"},
+        {"info " + dir.file(damaged_name(0) + ".####.exr"), 1,
+         damaged_name(0) + ".0003.exr: empty file (0 bytes)"},
+        {"info " + dir.file(damaged_name(1) + ".####.exr"), 1,
+         damaged_name(1) + ".0003.exr: cannot read image header"},
+        {"info " + dir.file(damaged_name(2) + ".####.exr"), 1,
+         damaged_name(2) + ".0003.exr: damaged header: attribute"},
         // Cut or damaged after the header: the chunk offset table against the file size.
         {"info " + dir.file(damaged_name(3) + ".####.exr"), 1,
          damaged_name(3) + ".0003.exr: truncated: the file ends inside its chunk offset table"},
         {"info " + dir.file(damaged_name(4) + ".####.exr"), 1,
          damaged_name(4) + ".0003.exr: damaged chunk offset table: 1 of 1 chunks point past the end"},
-        {"info " + dir.file(damaged_name(6) + ".####.exr"), 1, damaged_name(6) + ".0003.exr: truncated: the last chunk"},
+        {"info " + dir.file(damaged_name(6) + ".####.exr"), 1,
+         damaged_name(6) + ".0003.exr: truncated: the last chunk"},
         // Damaged data in a file of the right size: only decoding finds it.
         {"info " + dir.file(damaged_name(5) + ".####.exr") + " --check", 1,
          damaged_name(5) + ".0003.exr: cannot decode rows 0-7"},
         {"info " + in + " --frames 0-3", 1, "in.0000.exr: frame 0 is missing"},
         {"info " + in + " --json " + dir.path(), 1, dir.path()},
-        {"compare " + dir.file(damaged_name(5) + ".####.exr") + " " + in + " -q", 4, damaged_name(5) + ".0003.exr"},
-        {"compare " + in + " " + dir.file(damaged_name(0) + ".####.exr") + " -q", 4, damaged_name(0) + ".0003.exr"},
+        {"compare " + dir.file(damaged_name(5) + ".####.exr") + " " + in + " -q", 4,
+         damaged_name(5) + ".0003.exr"},
+        {"compare " + in + " " + dir.file(damaged_name(0) + ".####.exr") + " -q", 4,
+         damaged_name(0) + ".0003.exr"},
         {"compare " + in + " " + dir.file("folder.####.exr") + " -q", 4, "folder.0003.exr"},
         {"compare " + in + " " + in + " --warn -1" + " -q", 5, "--warn"},
-        {"compare " + in + " " + in + " --json " + dir.file("out/c.json") + " --layer DiffInd" + " -q", 4, "DiffInd"},
+        {"compare " + in + " " + in + " --json " + dir.file("out/c.json") + " --layer DiffInd" + " -q", 4,
+         "DiffInd"},
         {"refine --scene switch --size 12x8 --frames 1-3 -q --denoised " + dir.file("den.####.exr") + " -o " +
              dir.file("out/r.####.exr"),
          1, "den.0002.exr: cannot read rows"},
+        // By gain refine needs the input's variance, which this sequence lacks.
+        {"refine --scene switch --size 12x8 --frames 1-3 --by-gain -q --denoised " +
+             dir.file("den.####.exr") + " -o " + dir.file("out/r.####.exr"),
+         1, "den.0001.exr: no DiffIndVar channels (the input's variance): refine chooses pixels by gain"},
+        {"refine --scene switch --size 12x8 --frames 1-3 --by-gain -q --denoised " +
+             dir.file("var.####.exr") + " -o " + dir.file("out/r.####.exr"),
+         1, "var.0001.exr: no modestack:spp attribute (the input's samples per pixel)"},
+        {"refine --scene switch --size 12x8 --by-gain --budget 2 -q --denoised " + dir.file("var.####.exr") +
+             " -o " + dir.file("out/r.####.exr"),
+         2, "three ways to choose the pixels"},
+        {"refine --masks-only --by-gain -q --denoised " + dir.file("var.####.exr") + " --masks " +
+             dir.file("out/m.####.exr"),
+         2, "--by-gain weighs the built-in re-render's samples"},
+        {"refine --scene switch --size 12x8 -q --denoised " + dir.file("den.####.exr") + " -o " +
+             dir.file("out/r.####.exr") + " --threshold 0",
+         2, "--threshold"},
         {"refine --scene switch --size 12x8 -q --denoised " + dir.file("den.####.exr") + " -o " +
              dir.file("out/r.####.exr") + " --spp -1",
          2, "--spp"},
