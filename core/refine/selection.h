@@ -20,8 +20,8 @@
 // rules it), so a pixel pays for its re-render when its gain is at least
 // (S / s) · E, E the relMSE that sigma predicts for the shot. Where bias rules
 // the error more spp everywhere buys less than that, and the rule re-renders
-// no more than it should. It is only as good as sigma: a floor in sigma² on
-// most pixels inflates E more than the gains (bench/results/refine_gain.md).
+// no more than it should. It is only as good as sigma's ranking of the error
+// (bench/results/refine_gain.md).
 #pragma once
 
 #include <cstddef>
