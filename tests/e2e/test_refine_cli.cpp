@@ -348,4 +348,26 @@ TEST_CASE("run writes every output and the same pixels for --threads 1 and 2")
     CHECK(testkit::read_channels(noisy_frame, {"DiffDir.R", "DiffDir.G", "DiffDir.B"}) !=
           testkit::read_channels(final_frame, {"DiffDir.R", "DiffDir.G", "DiffDir.B"}));
     CHECK(summary["quality"]["DiffInd"]["relmse_crossing_frames"]["refined"].get<double>() > 0);
+    // Each beauty of the summary is that stage's own passes: the denoised one from the denoised
+    // DiffDir and DiffInd (not the noisy DiffDir), so that it differs from the final by refine alone.
+    for (const auto& row : summary["quality"]["per_frame"]) {
+        const int frame = row["frame"].get<int>();
+        CAPTURE(frame);
+        char name[64];
+        std::snprintf(name, sizeof name, "switch.%04d.exr", frame);
+        const std::vector<std::string> passes{"DiffCol.R", "DiffCol.G", "DiffCol.B", "DiffDir.R",
+                                              "DiffDir.G", "DiffDir.B", "DiffInd.R", "DiffInd.G",
+                                              "DiffInd.B", "Emit.R",    "Emit.G",    "Emit.B"};
+        const auto denoised = testkit::read_channels(dir.file(std::string("two/denoised/") + name), passes);
+        std::vector<float> beauty(denoised.size() / 4);
+        for (size_t p = 0; p < beauty.size() / 3; ++p)
+            for (int c = 0; c < 3; ++c) {
+                const float* pass = denoised.data() + p * 12;
+                beauty[p * 3 + c] = pass[c] * (pass[3 + c] + pass[6 + c]) + pass[9 + c];
+            }
+        const auto reference = testkit::read_channels(dir.file(std::string("two/reference/") + name),
+                                                      {"Combined.R", "Combined.G", "Combined.B"});
+        CHECK(row["beauty"][1].get<double>() ==
+              doctest::Approx(relative_mse(beauty, reference)).epsilon(1e-5));
+    }
 }
