@@ -73,7 +73,8 @@ Subcommand add_refine_command(CLI::App& parent)
             ->add_option(
                 "--threshold", options->threshold,
                 "Re-render pixels whose sigma / sqrt(value^2 + floor^2) is at least this (largest over "
-                "R, G, B; default 0.2)")
+                "R, G, B)")
+            ->default_str("0.2")
             ->check(CLI::PositiveNumber);
     command->add_flag(
         "--by-gain", options->by_gain,
