@@ -21,15 +21,20 @@ bool layer_is(const std::string& layer, const std::string& wanted)
                                layer[layer.size() - wanted.size() - 1] == '.');
 }
 
+// Whether any part of the frame has layer `wanted` (any prefix, layer_is).
+bool has_layer(const io::FrameHeader& header, const std::string& wanted)
+{
+    for (const auto& group : io::group_layers(io::channels_as_read(header))) // every part's
+        if (layer_is(group.name, wanted))
+            return true;
+    return false;
+}
+
 } // namespace
 
 void check_sigma_channels(const std::string& file, const std::string& layer)
 {
-    io::FrameHeader header = io::read_frame_header(file);
-    bool has_sigma = false;
-    for (const auto& group : io::group_layers(io::channels_as_read(header))) // every part's
-        has_sigma = has_sigma || layer_is(group.name, layer + ".sigma");
-    if (!has_sigma)
+    if (!has_layer(io::read_frame_header(file), layer + ".sigma"))
         throw bad_input(file,
                         fmt::format("no {}.sigma channels: refine needs the output of 'modestack denoise "
                                     "--layer {}'",
@@ -113,10 +118,7 @@ float gain_threshold_of_shot(const io::SequenceReader& reader, const refine::Ref
 int recorded_input_spp(const std::string& file, const std::string& layer)
 {
     const io::FrameHeader header = io::read_frame_header(file);
-    bool has_variance = false;
-    for (const auto& group : io::group_layers(io::channels_as_read(header)))
-        has_variance = has_variance || layer_is(group.name, layer + "Var");
-    if (!has_variance)
+    if (!has_layer(header, layer + "Var"))
         throw bad_input(file,
                         fmt::format("no {}Var channels (the input's variance): refine chooses pixels by "
                                     "gain from them; pass --threshold or --budget",

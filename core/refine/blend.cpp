@@ -29,8 +29,7 @@ void blend_refined(const float* weights, std::size_t pixels, int channels, const
             double old_sigma = sigma[i];
             double variance = std::fmax(0.0, rendered_variance[i]);
             value[i] = static_cast<float>(w * rendered[i] + (1.0 - w) * value[i]);
-            sigma[i] = static_cast<float>(
-                std::sqrt(w * w * variance + (1.0 - w) * (1.0 - w) * old_sigma * old_sigma));
+            sigma[i] = static_cast<float>(std::sqrt(blended_variance(w, variance, old_sigma)));
         }
     }
 }

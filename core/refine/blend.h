@@ -20,6 +20,14 @@ namespace modestack::refine {
 /// variance (r); 1 where both are 0.
 double rendered_share(double denoised_variance, double rendered_variance);
 
+/// A channel's variance after the blend with share `share`: share²·r + (1 −
+/// share)²·sigma², the two estimates independent.
+inline double blended_variance(double share, double rendered_variance, double denoised_sigma)
+{
+    return share * share * rendered_variance +
+           (1.0 - share) * (1.0 - share) * denoised_sigma * denoised_sigma;
+}
+
 /// For each of `pixels` pixels with weights[p] > 0, w = weights[p] · s / (s + r)
 /// (s, r: the pixel's channel means of sigma² and rendered_variance; w =
 /// weights[p] where both are 0), and each of `channels` channels:

@@ -80,7 +80,7 @@ void refine_gains(const float* value, const float* sigma, const float* input_var
         double gain = 0;
         for (int c = 0; c < channels; ++c) {
             const double before = static_cast<double>(s[c]) * s[c];
-            const double after = w * w * std::fmax(0.0, r[c] * variance_scale) + (1 - w) * (1 - w) * before;
+            const double after = blended_variance(w, std::fmax(0.0, r[c] * variance_scale), s[c]);
             gain += (before - after) / (static_cast<double>(v[c]) * v[c] + floor_squared);
         }
         const double mean = gain / channels;
