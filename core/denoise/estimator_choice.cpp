@@ -48,7 +48,8 @@ MODESTACK_AVX2_CLONES void box_mean(const Plane& source, int height, int radius,
     column.resize(static_cast<size_t>(row_values));
     // Pixels [inner_begin, inner_end) see the whole window along the row.
     const int inner_begin = std::min(radius, width), inner_end = std::max(inner_begin, width - radius);
-    const double inner_count = 2 * radius + 1;
+    // Reciprocals, not divisions: a division per value was most of the box's time.
+    const double inner_scale = 1.0 / (2 * radius + 1);
     for (int y = top; y < bottom; ++y) {
         const float* in = source.row(y);
         float* out = horizontal.data() + (y - top) * row_values;
@@ -61,7 +62,7 @@ MODESTACK_AVX2_CLONES void box_mean(const Plane& source, int height, int radius,
                 column[static_cast<size_t>(i)] += shifted[i];
         }
         for (std::int64_t i = begin; i < end; ++i)
-            out[i] = static_cast<float>(column[static_cast<size_t>(i)] / inner_count);
+            out[i] = static_cast<float>(column[static_cast<size_t>(i)] * inner_scale);
         for (int x = 0; x < width; ++x) {
             if (x == inner_begin && inner_end > inner_begin)
                 x = inner_end;
@@ -82,10 +83,10 @@ MODESTACK_AVX2_CLONES void box_mean(const Plane& source, int height, int radius,
         for (std::int64_t i = 0; i < row_values; ++i)
             column[static_cast<size_t>(i)] += horizontal[static_cast<size_t>((q - top) * row_values + i)];
     for (int y = first; y < last; ++y) {
-        const double count = std::min(height - 1, y + radius) - std::max(0, y - radius) + 1;
+        const double scale = 1.0 / (std::min(height - 1, y + radius) - std::max(0, y - radius) + 1);
         float* out = result.row(y);
         for (std::int64_t i = 0; i < row_values; ++i)
-            out[i] = static_cast<float>(column[static_cast<size_t>(i)] / count);
+            out[i] = static_cast<float>(column[static_cast<size_t>(i)] * scale);
         if (y + 1 == last)
             break;
         if (y + radius + 1 < height) {
@@ -336,7 +337,9 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                    work.blur_sums);
     }
     // Per pixel: each candidate's SURE and its gain over the rebuild, with their
-    // squares for the tests.
+    // squares for the tests (channel means by a reciprocal: divisions were the
+    // choice's slowest steps).
+    const double per_channel = 1.0 / channels;
     auto [sure, sure_squared, difference, difference_squared] =
         std::tie(work.sure, work.sure_squared, work.difference, work.difference_squared);
     for (int k = 0; k < kEstimators; ++k)
@@ -360,7 +363,8 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             }
             for (int k = 0; k < kEstimators; ++k)
                 if (used[k]) {
-                    const double s = pixel_sure[k] / channels, d = (pixel_sure[0] - pixel_sure[k]) / channels;
+                    const double s = pixel_sure[k] * per_channel,
+                                 d = (pixel_sure[0] - pixel_sure[k]) * per_channel;
                     sure[k].row(y)[x] = static_cast<float>(s),
                     sure_squared[k].row(y)[x] = static_cast<float>(s * s);
                     difference[k].row(y)[x] = static_cast<float>(d);
@@ -414,14 +418,33 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
 
     // The choice and its sigma at the band's own rows.
     ChoiceCounts counts;
-    const double z = options.significance;
+    const double z_squared = options.significance * options.significance;
+    const double below_limit = options.below_significance * options.below_significance * kBelowDeviation *
+                               kBelowDeviation; // × scale², as one product in the same order
     std::vector<double> floor(static_cast<size_t>(channels));
     for (int y = row; y < end; ++y) {
+        // This row of every plane the choice reads (the pixel loop is the choice's hot spot).
+        std::array<const float*, kEstimators> gain_mean{}, gain_square_mean{}, near_sure{}, square_mean{};
+        for (int k = 0; k < kEstimators; ++k)
+            if (used[k]) {
+                square_mean[k] = sure_square_mean[k].row(y);
+                if (k > 0)
+                    gain_mean[k] = difference_mean[k].row(y),
+                    gain_square_mean[k] = difference_square_mean[k].row(y),
+                    near_sure[k] = local_sure[k].row(y);
+            }
+        const float *pooled_sure = sure_mean[0].row(y), *variance_row = variance.row(y);
+        const float* engine_sigma = frame.sigma + (y - frame.rebuilt_begin) * row_samples;
+        const float* below_row = below_test ? work.below_mean.row(y) : nullptr;
+        const float* scale_row = below_test ? work.noise_scale_mean.row(y) : nullptr;
+        const double kernel_y_squares[2] = {kernel_y[0].squares.empty() ? 0.0 : kernel_y[0].squares[y],
+                                            kernel_y[1].squares.empty() ? 0.0 : kernel_y[1].squares[y]};
         for (int x = 0; x < width; ++x) {
             const int window = clipped_window(width, height, x, y, radius);
-            // gain > z · its standard error over the window, squared (no root per pixel).
-            auto significant = [&](double gain, double mean, double square_mean) {
-                return gain > 0 && gain * gain > z * z * std::max(square_mean - mean * mean, 0.0) / window;
+            // gain > z · its standard error over the window, squared (no root
+            // and no division per pixel).
+            auto significant = [&](double gain, double mean, double square) {
+                return gain > 0 && gain * gain * window > z_squared * std::max(square - mean * mean, 0.0);
             };
             // The rebuild unless others beat it by z standard errors over the
             // window; of those, the one with the least SURE over the 3×3 pixels
@@ -435,39 +458,34 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             for (int k = 1; k < kEstimators; ++k) {
                 if (!used[k])
                     continue;
-                const double mean = difference_mean[k].row(y)[x], local = local_sure[k].row(y)[x];
-                if (significant(mean, mean, difference_square_mean[k].row(y)[x]) &&
-                    (chosen == 0 || local < least))
+                const double mean = gain_mean[k][x], local = near_sure[k][x];
+                if (significant(mean, mean, gain_square_mean[k][x]) && (chosen == 0 || local < least))
                     chosen = k, least = local;
             }
             if (chosen == 0 && below_test) {
                 const int near = clipped_window(width, height, x, y, 1);
-                const double scale = work.noise_scale_mean.row(y)[x];
-                const double excess = work.below_mean.row(y)[x] + kBelowMean * scale;
-                if (excess < 0 && excess * excess * near > options.below_significance *
-                                                               options.below_significance * kBelowDeviation *
-                                                               kBelowDeviation * scale * scale)
+                const double scale = scale_row[x];
+                const double excess = below_row[x] + kBelowMean * scale;
+                if (excess < 0 && excess * excess * near > below_limit * scale * scale)
                     for (int k = 1; k < kEstimators; ++k)
-                        if (used[k] && (chosen == 0 || local_sure[k].row(y)[x] < least))
-                            chosen = k, least = local_sure[k].row(y)[x];
+                        if (used[k] && (chosen == 0 || near_sure[k][x] < least))
+                            chosen = k, least = near_sure[k][x];
             }
             // Sigma: the chosen one's variance part, plus its pooled SURE's excess where significant.
-            double floor_mean = 0;
+            double floor_sum = 0;
             for (int c = 0; c < channels; ++c) {
                 const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
-                const double v = variance.row(y)[i];
-                const double engine = frame.sigma[(y - frame.rebuilt_begin) * row_samples + i];
-                floor[c] = chosen == 0 ? engine * engine
-                           : chosen == 1
-                               ? v
-                               : v * kernel_x[chosen - 2].squares[x] * kernel_y[chosen - 2].squares[y];
-                floor_mean += floor[c] / channels;
+                const double v = variance_row[i];
+                const double engine = engine_sigma[i];
+                floor[c] = chosen == 0   ? engine * engine
+                           : chosen == 1 ? v
+                                         : v * kernel_x[chosen - 2].squares[x] * kernel_y_squares[chosen - 2];
+                floor_sum += floor[c];
             }
-            const double risk =
-                sure_mean[0].row(y)[x] - (chosen == 0 ? 0.0 : difference_mean[chosen].row(y)[x]);
-            const double excess = significant(risk - floor_mean, risk, sure_square_mean[chosen].row(y)[x])
-                                      ? risk - floor_mean
-                                      : 0;
+            const double floor_mean = floor_sum * per_channel;
+            const double risk = pooled_sure[x] - (chosen == 0 ? 0.0 : gain_mean[chosen][x]);
+            const double excess =
+                significant(risk - floor_mean, risk, square_mean[chosen][x]) ? risk - floor_mean : 0;
             const float* source = chosen == 0   ? rebuilt_at(y)
                                   : chosen == 1 ? input_at(y)
                                                 : blurred[chosen - 2].row(y);
@@ -477,8 +495,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             for (int c = 0; c < channels; ++c) {
                 values[out + c] = source[static_cast<std::int64_t>(x) * channels + c];
                 const double squared = floor[static_cast<size_t>(c)] + excess;
-                sigma[out + c] =
-                    std::sqrt(static_cast<float>(std::max(squared, 0.0))); // float: the root's latency
+                sigma[out + c] = static_cast<float>(std::max(squared, 0.0)); // its root below
                 pixel_squared += squared;
             }
             counts.squared_error[chosen] += pixel_squared;
@@ -487,6 +504,10 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             ++counts.pixels[chosen];
         }
     }
+    // The roots in one loop that vectorises (one at a time they were a tenth of the choice).
+    const std::int64_t samples = (end - row) * row_samples;
+    for (std::int64_t i = 0; i < samples; ++i)
+        sigma[i] = std::sqrt(sigma[i]);
     return counts;
 }
 
