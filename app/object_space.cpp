@@ -12,8 +12,9 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cstdlib>
+#include <cmath>
 #include <memory>
+#include <optional>
 #include <utility>
 
 namespace modestack::app {
@@ -32,17 +33,19 @@ PointHeader read_point_header(const io::SequenceReader& points)
     const io::FrameHeader header = io::read_frame_header(points.sequence().files.front());
     const std::int64_t slots = static_cast<std::int64_t>(points.width()) * points.height();
     PointHeader result{slots, 0.0};
-    // Attribute values read "type value": the number is the last word.
-    auto number = [](const std::string& value) { return value.substr(value.find_last_of(' ') + 1); };
-    for (const auto& [name, value] : header.attributes) {
-        if (name == "modestack:points") {
-            result.count = std::atoll(number(value).c_str());
-            if (result.count < 1 || result.count > slots)
-                throw bad_input(header.file, fmt::format("records {} points in a {}x{} point image", result.count,
-                                                         points.width(), points.height()));
-        } else if (name == "modestack:point_spacing") {
-            result.spacing = std::atof(number(value).c_str());
-        }
+    if (const std::optional<std::string> value = io::find_attribute(header, "modestack:points")) {
+        const std::optional<double> count = io::attribute_number(*value);
+        if (!count || *count < 1 || *count > static_cast<double>(slots) || *count != std::floor(*count))
+            throw bad_input(header.file, fmt::format("modestack:points is {}: not a point count of a {}x{} "
+                                                     "point image",
+                                                     *value, points.width(), points.height()));
+        result.count = static_cast<std::int64_t>(*count);
+    }
+    if (const std::optional<std::string> value = io::find_attribute(header, "modestack:point_spacing")) {
+        const std::optional<double> spacing = io::attribute_number(*value);
+        if (!spacing || *spacing < 0)
+            throw bad_input(header.file, fmt::format("modestack:point_spacing is {}: not a spacing", *value));
+        result.spacing = *spacing;
     }
     return result;
 }

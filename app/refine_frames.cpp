@@ -10,6 +10,8 @@
 #include <fmt/format.h>
 
 #include <chrono>
+#include <cmath>
+#include <optional>
 
 namespace modestack::app {
 namespace {
@@ -123,16 +125,14 @@ int recorded_input_spp(const std::string& file, const std::string& layer)
                         fmt::format("no {}Var channels (the input's variance): refine chooses pixels by "
                                     "gain from them; pass --threshold or --budget",
                                     layer));
-    for (const auto& [name, value] : header.attributes)
-        if (name == "modestack:spp") {
-            // Attribute values read "type value": the number is the last word.
-            const int spp = std::atoi(value.substr(value.find_last_of(' ') + 1).c_str());
-            if (spp >= 1)
-                return spp;
-            throw bad_input(file, fmt::format("modestack:spp is {}: not a sample count", value));
-        }
-    throw bad_input(file, "no modestack:spp attribute (the input's samples per pixel): refine chooses pixels "
-                          "by gain from it; pass --threshold or --budget");
+    const std::optional<std::string> value = io::find_attribute(header, "modestack:spp");
+    if (!value)
+        throw bad_input(file, "no modestack:spp attribute (the input's samples per pixel): refine chooses "
+                              "pixels by gain from it; pass --threshold or --budget");
+    const std::optional<double> spp = io::attribute_number(*value);
+    if (!spp || *spp < 1 || *spp > 1e9 || *spp != std::floor(*spp))
+        throw bad_input(file, fmt::format("modestack:spp is {}: not a sample count", *value));
+    return static_cast<int>(*spp);
 }
 
 void add_mask_output(std::vector<std::unique_ptr<io::FrameOutput>>& outputs, const std::string& file,

@@ -6,6 +6,9 @@
 #include <OpenImageIO/imageio.h>
 #include <fmt/format.h>
 
+#include <cmath>
+#include <cstdlib>
+
 namespace modestack::io {
 
 namespace {
@@ -62,6 +65,26 @@ std::vector<std::string> channels_as_read(const FrameHeader& header)
         names.insert(names.end(), part_names.begin(), part_names.end());
     }
     return names;
+}
+
+std::optional<std::string> find_attribute(const FrameHeader& header, const std::string& name)
+{
+    for (const auto& [attribute, value] : header.attributes)
+        if (attribute == name)
+            return value;
+    return std::nullopt;
+}
+
+std::optional<double> attribute_number(const std::string& value)
+{
+    const std::string word = value.substr(value.find_last_of(' ') + 1);
+    if (word.empty())
+        return std::nullopt;
+    char* end = nullptr;
+    const double number = std::strtod(word.c_str(), &end);
+    if (end != word.c_str() + word.size() || !std::isfinite(number))
+        return std::nullopt;
+    return number;
 }
 
 std::string describe_window(int x, int y, int width, int height)

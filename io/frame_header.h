@@ -4,6 +4,7 @@
 // frames of a sequence agree before any work starts.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -41,6 +42,13 @@ FrameHeader read_frame_header(const std::string& file);
 /// single-part file; every part's, in part order, named as part_channel_names
 /// (io/layers.h) says, for a multi-part one.
 std::vector<std::string> channels_as_read(const FrameHeader& header);
+
+/// The "type value" text of attribute `name`, or nothing when the header lacks it.
+std::optional<std::string> find_attribute(const FrameHeader& header, const std::string& name);
+
+/// The number an attribute's "type value" text holds (its last word, whole), or
+/// nothing when that is not a finite number.
+std::optional<double> attribute_number(const std::string& value);
 
 /// "160x120" or "160x120+8+4" when the window does not start at 0,0.
 std::string describe_window(int x, int y, int width, int height);

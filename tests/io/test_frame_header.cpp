@@ -1,0 +1,67 @@
+// io/frame_header.h: attributes found by name and read as numbers, as the
+// commands that read our own attributes back (refine's modestack:spp, object
+// space's modestack:points) need them.
+#include "io/frame_header.h"
+#include "io/frame_output.h"
+#include "io/sequence.h"
+#include "io/sequence_reader.h"
+#include "tests/tools/testkit.h"
+
+#include <doctest/doctest.h>
+
+#include <cmath>
+#include <vector>
+
+using namespace modestack;
+using testkit::TempDir;
+
+TEST_CASE("frame header: attribute_number reads the value's last word, whole, or nothing")
+{
+    CHECK(io::attribute_number("int 16") == 16.0);
+    CHECK(io::attribute_number("float 0.25") == 0.25);
+    CHECK(io::attribute_number("double -3e-2") == -0.03);
+    CHECK(io::attribute_number("16") == 16.0); // no type word
+    CHECK_FALSE(io::attribute_number("int 16x"));
+    CHECK_FALSE(io::attribute_number("string abc"));
+    CHECK_FALSE(io::attribute_number("int "));
+    CHECK_FALSE(io::attribute_number(""));
+    CHECK_FALSE(io::attribute_number("float nan"));
+    CHECK_FALSE(io::attribute_number("float inf"));
+}
+
+TEST_CASE("frame header: attributes we write are found by name and read back as the numbers written")
+{
+    TempDir dir;
+    testkit::ExrLayout layout;
+    layout.width = 5;
+    layout.height = 3;
+    layout.channel_names = {"R", "G", "B"};
+    layout.channel_types = {"half", "half", "half"};
+    testkit::write_sequence(dir.file("in.%04d.exr"), {1}, layout,
+                            [](int, int x, int y, int c) { return 0.1f * (x + y + c); });
+    io::SequenceReader reader(io::find_input_sequence(dir.file("in.####.exr")), {""}); // the default layer
+    const std::string path = dir.file("out.0001.exr");
+    {
+        io::FrameOutput output(path, reader, 0, {},
+                               {io::HeaderAttribute::of_integer("modestack:spp", 64),
+                                io::HeaderAttribute::of_real("modestack:point_spacing", 0.0125),
+                                io::HeaderAttribute::of_text("modestack:command", "modestack test 12")});
+        std::vector<unsigned char> native;
+        reader.read_native(0, 0, 3, native);
+        const std::vector<float> replaced(5 * 3 * 3, 0.5f);
+        output.write_replaced_rows(0, 3, native, replaced.data(), nullptr);
+        output.commit();
+    }
+    const io::FrameHeader header = io::read_frame_header(path);
+    const auto spp = io::find_attribute(header, "modestack:spp");
+    REQUIRE(spp);
+    CHECK(io::attribute_number(*spp) == 64.0);
+    const auto spacing = io::find_attribute(header, "modestack:point_spacing");
+    REQUIRE(spacing);
+    REQUIRE(io::attribute_number(*spacing));
+    CHECK(std::abs(*io::attribute_number(*spacing) - 0.0125) < 1e-9); // a float attribute: 7 digits
+    const auto command = io::find_attribute(header, "modestack:command");
+    REQUIRE(command);
+    CHECK(command->find("modestack test 12") != std::string::npos);
+    CHECK_FALSE(io::find_attribute(header, "modestack:absent"));
+}
