@@ -11,7 +11,9 @@
 #    (ZIP's speed depends on the data; the second is the fair floor), the
 #    latter also through modestack's own I/O (bench_io_floor_modestack), and
 #    `modestack denoise --method gram|rsvd`, each with the default --max-memory
-#    and with --max-memory 512M, and gram with --no-mode-filter, REPEATS times
+#    and with --max-memory $STREAMED_MEMORY (default 512M; a run the budget
+#    refuses gets a row saying so, with modestack's message), and gram with
+#    --no-mode-filter, REPEATS times
 #    each (default 3): wall time, CPU time, peak RSS (GNU time), phase times and
 #    passes from --json.
 # 4. Times gram against rsvd on a small 320x240 image with 48, 200 and 800
@@ -36,6 +38,7 @@ size=${SIZE:-1920x1080}
 small_frames=${SMALL_FRAMES:-48 200 800}
 small_size=${SMALL_SIZE:-320x240}
 methods=${METHODS:-gram rsvd}
+streamed=${STREAMED_MEMORY:-512M}
 results=$bench_dir/results
 mkdir -p "$bench_dir" "$results"
 
@@ -108,6 +111,21 @@ floor_run()
     rm -rf "$floor"
 }
 
+# streamed_run TSV METHOD RUN DATA_DIR: denoise_run at --max-memory $streamed; a
+# refusal (the budget too small for the shot) is kept in $results/METHOD-$streamed.refused.
+streamed_run()
+{
+    local tsv=$1 method=$2 run=$3 data=$4 refusal=$results/$2-$streamed.refused
+    rm -f "$refusal"
+    if ! denoise_run "$tsv" "$method-$streamed" "$run" "$data" --method "$method" --max-memory "$streamed" \
+        2>"$refusal.log"; then
+        grep '^modestack: ' "$refusal.log" >"$refusal" || cp "$refusal.log" "$refusal"
+        echo "bench: $method at --max-memory $streamed refused: $(cat "$refusal")" >&2
+    fi
+    grep '^bench: ' "$refusal.log" >&2 || true
+    rm -f "$refusal.log"
+}
+
 # json_median LABEL JQ_EXPRESSION: median over the runs' JSON summaries.
 json_median()
 {
@@ -138,18 +156,18 @@ if [[ ${SKIP_LARGE:-0} != 1 ]]; then
     content_bytes=0
     labels=()
     for method in $methods; do
-        labels+=("$method-default" "$method-512M")
+        labels+=("$method-default" "$method-$streamed")
         [[ $method == gram ]] && labels+=(gram-no-filter)
     done
     for run in $(seq 1 "$repeats"); do
         denoise_run "$tsv" gram-default "$run" "$data" --method gram
         floor_run "$tsv" "$run" "$data"
         floor_run "$tsv" "$run" "$data" "$bench_dir/out/denoised.%04d.exr"
-        denoise_run "$tsv" gram-512M "$run" "$data" --method gram --max-memory 512M
+        streamed_run "$tsv" gram "$run" "$data"
         denoise_run "$tsv" gram-no-filter "$run" "$data" --method gram --no-mode-filter
         if [[ " $methods " == *" rsvd "* ]]; then
             denoise_run "$tsv" rsvd-default "$run" "$data" --method rsvd
-            denoise_run "$tsv" rsvd-512M "$run" "$data" --method rsvd --max-memory 512M
+            streamed_run "$tsv" rsvd "$run" "$data"
         fi
     done
     rm -rf "$bench_dir/out"
@@ -180,6 +198,10 @@ if [[ ${SKIP_LARGE:-0} != 1 ]]; then
             "$(awk -F'\t' '$1 == "io-floor" && $6 > m { m = $6 } END { printf "%.0f", m / 1024 }' "$tsv")"
         samples=$((width * height * 3))
         for label in "${labels[@]}"; do
+            if [[ -f $results/$label.refused ]]; then
+                printf '| %s | refused: %s | | | | | | | | | | | |\n' "$label" "$(cat "$results/$label.refused")"
+                continue
+            fi
             read -r wall_min wall_median < <(bench_stats "$tsv" "$label" 3)
             read -r cpu_min cpu_median < <(bench_stats "$tsv" "$label" 7)
             rss_max=$(awk -F'\t' -v l="$label" '$1 == l && $6 > m { m = $6 } END { printf "%.0f", m / 1024 }' "$tsv")

@@ -49,7 +49,7 @@ std::int64_t pass_two_bytes(const ShotShape& shape, const PassNeeds& needs, int 
         frames * (computed_rows + 2 * needs.sigma_halo_rows) +
         (needs.band_images + kSigmaScratchImages) * computed_rows +
         (sigma_kept_apart ? frames * computed_rows : 0) +
-        (needs.choice_rows > 0 ? frames * (computed_rows + 2 * needs.choice_rows) : 0);
+        (needs.choice_rows > 0 ? needs.choice_workers * (computed_rows + 2 * needs.choice_rows) : 0);
     const std::int64_t survey_only = static_cast<std::int64_t>(needs.survey_images) * halo_band_rows;
     const std::int64_t images =
         static_cast<std::int64_t>(needs.halo_images) * halo_band_rows + std::max(pass_two_only, survey_only);

@@ -36,8 +36,10 @@ struct PassNeeds {
     /// Rows beyond a band that pass 2 rebuilds for the estimator choice
     /// (estimator_choice.h); > 0 also keeps each frame's sigma apart, since the
     /// choice reads the band's input rows after sigma, and holds the input rows
-    /// the choice reads as the source gives them (about as many rows again).
+    /// the choice reads as the source gives them (about as many rows again),
+    /// one frame's per worker (`choice_workers` of them).
     int choice_rows = 0;
+    int choice_workers = 0;
     /// Several layers' runs (layer_runs.h): beside each layer's own rows, the
     /// rows decoded for all of them are held for a band of every frame (and, of
     /// a kept shot, for `shared_frames` whole frames while it is read), and so

@@ -186,7 +186,8 @@ private:
     ScratchBuffer<float> m_kept_sigma; // sigma_from_mean writes every value
     tbb::enumerable_thread_specific<std::vector<float>> m_kept_noise_of_worker; // one frame's
     tbb::enumerable_thread_specific<Chosen> m_chosen_of_worker;
-    ScratchBuffer<float> m_raw; // the input rows the choice reads, as the source gives them
+    tbb::enumerable_thread_specific<ScratchBuffer<float>> m_raw_of_worker; // one frame's input rows the
+                                                                           // choice reads, unclean
     std::vector<float> m_noise_scale; // the choice's noise scale of the band's rebuilt rows
     std::vector<float> m_ranks;
 };

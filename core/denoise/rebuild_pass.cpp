@@ -93,7 +93,6 @@ void RebuildPass::add_rows(int row, int end)
     const int input_reach = estimator_input_reach(estimators);
     Band& band = m_band;
     ScratchBuffer<float>& kept_sigma = m_kept_sigma;
-    ScratchBuffer<float>& raw = m_raw;
     std::vector<float>& ranks = m_ranks;
     RebuildReport& report = m_report;
 
@@ -155,12 +154,10 @@ void RebuildPass::add_rows(int row, int end)
 
     const int raw_begin = std::max(0, row - input_reach), raw_end = std::min(shape.height, end + input_reach);
     if (estimators.enabled()) {
-        m_stream.read_raw_rows(raw_begin, raw_end, data, raw);
         m_noise_scale.resize(static_cast<size_t>(valid / shape.channels));
         noise_scale_rows(rebuilder.noise_variance().data(), valid / shape.channels, shape.channels,
                          m_noise_scale.data());
     }
-    const std::int64_t raw_rows = (raw_end - raw_begin) * row_samples;
     tbb::parallel_for(0, frames, [&](int frame) { // a window of the kept shot has no pass-through rows
         const PassThroughRows* pass_through =
             data.pass_through.empty() ? nullptr : &data.pass_through[static_cast<size_t>(frame)];
@@ -171,13 +168,16 @@ void RebuildPass::add_rows(int row, int end)
                             pass_through);
             return;
         }
-        // Made again rather than kept from sigma's loop: one frame per worker, not every frame's.
+        // Made again rather than kept from sigma's loop, and the input read
+        // here: one frame per worker, not every frame's.
         std::vector<float>& kept_noise = m_kept_noise_of_worker.local();
         if (filter)
             kept_noise_of(frame, kept_noise);
+        ScratchBuffer<float>& raw = m_raw_of_worker.local();
+        m_stream.read_raw_frame_rows(frame, raw_begin, raw_end, data, raw);
         ChoiceFrame choice_frame;
         choice_frame.image = {shape.width, shape.height, shape.channels};
-        choice_frame.input = raw.data() + frame * raw_rows;
+        choice_frame.input = raw.data();
         choice_frame.input_begin = raw_begin, choice_frame.input_end = raw_end;
         choice_frame.rebuilt = frame_output, choice_frame.sigma = frame_sigma;
         choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;

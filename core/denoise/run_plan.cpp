@@ -81,6 +81,7 @@ PassNeeds pass_needs(const Settings& settings, const ShotShape& shape, const Mod
     // each worker's planes of one frame (about 10 images: estimator_choice.cpp).
     if (settings.estimators.enabled()) {
         needs.choice_rows = estimator_rebuilt_reach(settings.estimators);
+        needs.choice_workers = tbb::this_task_arena::max_concurrency();
         needs.halo_rows =
             std::max(needs.halo_rows + needs.choice_rows, estimator_input_reach(settings.estimators));
         needs.band_images += 10 * tbb::this_task_arena::max_concurrency();

@@ -170,20 +170,19 @@ Band& ShotStream::band_with_halo(Band& band, int row, int end, bool with_pass_th
     return band;
 }
 
-void ShotStream::read_raw_rows(int row_begin, int row_end, const Band& cleaned, ScratchBuffer<float>& raw)
+void ShotStream::read_raw_frame_rows(int frame, int row_begin, int row_end, const Band& cleaned,
+                                     ScratchBuffer<float>& raw)
 {
     throw_if_cancelled();
     const std::int64_t rows = row_samples() * (row_end - row_begin);
     const std::int64_t first = (row_begin - cleaned.row_begin) * row_samples();
-    raw.resize(static_cast<size_t>(rows) * m_shape.frames); // read_rows writes every value
-    tbb::parallel_for(0, m_shape.frames, [&](int frame) {
-        float* destination = raw.data() + frame * rows;
-        m_source.read_rows(frame, row_begin, row_end, destination, nullptr);
-        const float* clean = cleaned.data + frame * cleaned.stride + first;
-        for (std::int64_t i = 0; i < rows; ++i)
-            if (!std::isfinite(destination[i]))
-                destination[i] = clean[i];
-    });
+    raw.resize(static_cast<size_t>(rows)); // read_rows writes every value
+    float* destination = raw.data();
+    m_source.read_rows(frame, row_begin, row_end, destination, nullptr);
+    const float* clean = cleaned.data + frame * cleaned.stride + first;
+    for (std::int64_t i = 0; i < rows; ++i)
+        if (!std::isfinite(destination[i]))
+            destination[i] = clean[i];
 }
 
 Band& ShotStream::read_task_band(Band& band, int row, int end)

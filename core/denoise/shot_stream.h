@@ -89,11 +89,14 @@ public:
     /// window into the kept shot, or read into `band` (`with_pass_through`: with
     /// each frame's other channels, for the writes of pass 2).
     Band& band_with_halo(Band& band, int row, int end, bool with_pass_through);
-    /// Rows [row_begin, row_end) of every frame as the source gives them, before
+    /// Rows [row_begin, row_end) of one frame as the source gives them, before
     /// the firefly cleaning (the estimator choice judges the rebuild against
-    /// the input itself), into `raw` [frame][row][x][channel]; a non-finite sample
-    /// takes its value in `cleaned` (a band holding those rows). A fresh read.
-    void read_raw_rows(int row_begin, int row_end, const Band& cleaned, ScratchBuffer<float>& raw);
+    /// the input itself), into `raw` [row][x][channel]; a non-finite sample
+    /// takes its value in `cleaned` (a band holding those rows). A fresh read,
+    /// one frame at a time: a band's choice holds one frame's rows per worker,
+    /// not every frame's.
+    void read_raw_frame_rows(int frame, int row_begin, int row_end, const Band& cleaned,
+                             ScratchBuffer<float>& raw);
     /// A farm task's band: rows [row, end) with the plan's halo rows around them,
     /// read from the source (never the whole shot), cleaned in full.
     Band& read_task_band(Band& band, int row, int end);
