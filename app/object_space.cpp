@@ -12,7 +12,6 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <cmath>
 #include <memory>
 #include <optional>
 #include <utility>
@@ -34,12 +33,12 @@ PointHeader read_point_header(const io::SequenceReader& points)
     const std::int64_t slots = static_cast<std::int64_t>(points.width()) * points.height();
     PointHeader result{slots, 0.0};
     if (const std::optional<std::string> value = io::find_attribute(header, "modestack:points")) {
-        const std::optional<double> count = io::attribute_number(*value);
-        if (!count || *count < 1 || *count > static_cast<double>(slots) || *count != std::floor(*count))
+        const std::optional<std::int64_t> count = io::attribute_count(*value, slots);
+        if (!count)
             throw bad_input(header.file, fmt::format("modestack:points is {}: not a point count of a {}x{} "
                                                      "point image",
                                                      *value, points.width(), points.height()));
-        result.count = static_cast<std::int64_t>(*count);
+        result.count = *count;
     }
     if (const std::optional<std::string> value = io::find_attribute(header, "modestack:point_spacing")) {
         const std::optional<double> spacing = io::attribute_number(*value);

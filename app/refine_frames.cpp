@@ -10,7 +10,6 @@
 #include <fmt/format.h>
 
 #include <chrono>
-#include <cmath>
 #include <optional>
 
 namespace modestack::app {
@@ -129,8 +128,8 @@ int recorded_input_spp(const std::string& file, const std::string& layer)
     if (!value)
         throw bad_input(file, "no modestack:spp attribute (the input's samples per pixel): refine chooses "
                               "pixels by gain from it; pass --threshold or --budget");
-    const std::optional<double> spp = io::attribute_number(*value);
-    if (!spp || *spp < 1 || *spp > 1e9 || *spp != std::floor(*spp))
+    const std::optional<std::int64_t> spp = io::attribute_count(*value, 1'000'000'000);
+    if (!spp)
         throw bad_input(file, fmt::format("modestack:spp is {}: not a sample count", *value));
     return static_cast<int>(*spp);
 }

@@ -19,16 +19,6 @@ bool matches(const std::string& pattern, const std::string& text)
     return fnmatch(pattern.c_str(), text.c_str(), 0) == 0;
 }
 
-// An attribute's value as io::FrameHeader gives it ("string \"Arnold 7.2\""), without type and quotes.
-std::string attribute_value(const std::string& typed_value)
-{
-    const size_t space = typed_value.find(' ');
-    std::string value = space == std::string::npos ? typed_value : typed_value.substr(space + 1);
-    if (value.size() >= 2 && value.front() == '"' && value.back() == '"')
-        value = value.substr(1, value.size() - 2);
-    return value;
-}
-
 // The first header attribute of `header` that a name rule of `renderer` matches
 // (`values`: a value rule, weaker evidence, asked only when no renderer's name rule matched), or "".
 std::string attribute_evidence(const RendererConvention& renderer, const io::FrameHeader& header, bool values)
@@ -40,7 +30,7 @@ std::string attribute_evidence(const RendererConvention& renderer, const io::Fra
                     return fmt::format("header attribute {}", name);
             continue;
         }
-        const std::string value = attribute_value(typed_value);
+        const std::string value = io::attribute_value(typed_value);
         for (const AttributeValueRule& rule : renderer.detect_values)
             if (matches(rule.attribute, name) && matches(rule.value, value))
                 return fmt::format("header attribute {} = {}", name,

@@ -75,16 +75,33 @@ std::optional<std::string> find_attribute(const FrameHeader& header, const std::
     return std::nullopt;
 }
 
-std::optional<double> attribute_number(const std::string& value)
+std::string attribute_value(const std::string& typed_value)
 {
-    const std::string word = value.substr(value.find_last_of(' ') + 1);
-    if (word.empty())
+    const size_t space = typed_value.find(' ');
+    std::string value = space == std::string::npos ? typed_value : typed_value.substr(space + 1);
+    if (value.size() >= 2 && value.front() == '"' && value.back() == '"')
+        value = value.substr(1, value.size() - 2);
+    return value;
+}
+
+std::optional<double> attribute_number(const std::string& typed_value)
+{
+    const std::string value = attribute_value(typed_value);
+    if (value.empty())
         return std::nullopt;
     char* end = nullptr;
-    const double number = std::strtod(word.c_str(), &end);
-    if (end != word.c_str() + word.size() || !std::isfinite(number))
+    const double number = std::strtod(value.c_str(), &end);
+    if (end != value.c_str() + value.size() || !std::isfinite(number))
         return std::nullopt;
     return number;
+}
+
+std::optional<std::int64_t> attribute_count(const std::string& typed_value, std::int64_t largest)
+{
+    const std::optional<double> number = attribute_number(typed_value);
+    if (!number || *number < 1 || *number > static_cast<double>(largest) || *number != std::floor(*number))
+        return std::nullopt;
+    return static_cast<std::int64_t>(*number);
 }
 
 std::string describe_window(int x, int y, int width, int height)

@@ -4,6 +4,7 @@
 // frames of a sequence agree before any work starts.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <utility>
@@ -46,9 +47,17 @@ std::vector<std::string> channels_as_read(const FrameHeader& header);
 /// The "type value" text of attribute `name`, or nothing when the header lacks it.
 std::optional<std::string> find_attribute(const FrameHeader& header, const std::string& name);
 
-/// The number an attribute's "type value" text holds (its last word, whole), or
+/// The value of an attribute's "type value" text (`string "Arnold 7.2"` gives
+/// `Arnold 7.2`): what follows the type word, without a string's quotes.
+std::string attribute_value(const std::string& typed_value);
+
+/// The number an attribute's "type value" text holds (its whole value), or
 /// nothing when that is not a finite number.
-std::optional<double> attribute_number(const std::string& value);
+std::optional<double> attribute_number(const std::string& typed_value);
+
+/// A count an attribute records: its value when that is a whole number in
+/// [1, largest], else nothing.
+std::optional<std::int64_t> attribute_count(const std::string& typed_value, std::int64_t largest);
 
 /// "160x120" or "160x120+8+4" when the window does not start at 0,0.
 std::string describe_window(int x, int y, int width, int height);

@@ -84,7 +84,7 @@ PassNeeds pass_needs(const Settings& settings, const ShotShape& shape, const Mod
         needs.choice_workers = tbb::this_task_arena::max_concurrency();
         needs.halo_rows =
             std::max(needs.halo_rows + needs.choice_rows, estimator_input_reach(settings.estimators));
-        needs.band_images += 10 * tbb::this_task_arena::max_concurrency();
+        needs.band_images += 10 * needs.choice_workers;
     }
     return needs;
 }

@@ -15,7 +15,15 @@
 using namespace modestack;
 using testkit::TempDir;
 
-TEST_CASE("frame header: attribute_number reads the value's last word, whole, or nothing")
+TEST_CASE("frame header: attribute_value drops the type word and a string's quotes")
+{
+    CHECK(io::attribute_value("string \"Arnold 7.2\"") == "Arnold 7.2");
+    CHECK(io::attribute_value("int 16") == "16");
+    CHECK(io::attribute_value("16") == "16");
+    CHECK(io::attribute_value("float2 1, 2") == "1, 2");
+}
+
+TEST_CASE("frame header: attribute_number reads the whole value, or nothing")
 {
     CHECK(io::attribute_number("int 16") == 16.0);
     CHECK(io::attribute_number("float 0.25") == 0.25);
@@ -27,6 +35,19 @@ TEST_CASE("frame header: attribute_number reads the value's last word, whole, or
     CHECK_FALSE(io::attribute_number(""));
     CHECK_FALSE(io::attribute_number("float nan"));
     CHECK_FALSE(io::attribute_number("float inf"));
+    CHECK_FALSE(io::attribute_number("float2 1, 2")); // not its last word
+}
+
+TEST_CASE("frame header: attribute_count takes whole numbers from 1 to the largest, nothing else")
+{
+    CHECK(io::attribute_count("int 1", 10) == 1);
+    CHECK(io::attribute_count("int 10", 10) == 10);
+    CHECK(io::attribute_count("float 4", 10) == 4);
+    CHECK_FALSE(io::attribute_count("int 11", 10));
+    CHECK_FALSE(io::attribute_count("int 0", 10));
+    CHECK_FALSE(io::attribute_count("int -3", 10));
+    CHECK_FALSE(io::attribute_count("float 2.5", 10));
+    CHECK_FALSE(io::attribute_count("string many", 10));
 }
 
 TEST_CASE("frame header: attributes we write are found by name and read back as the numbers written")
