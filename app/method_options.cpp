@@ -51,7 +51,9 @@ void add_method_options(CLI::App& command, MethodOptions& options)
     command.add_option(
         "--estimators", options.estimators,
         "Estimators each pixel may take, comma-separated: rebuild (the temporal rebuild), input (the input "
-        "as read), spatial (Gaussian blurs of the input, 1 and 2 px); 'rebuild' alone turns the choice off. "
+        "as read), spatial (Gaussian blurs of the input, 1 and 2 px), nlmeans (non-local means of the input: "
+        "keeps hard shadow edges; only where the rebuild was rejected, not in auto); 'rebuild' alone turns "
+        "the choice off. "
         "The rebuild is kept unless another's risk (SURE, 7x7) is lower by 2 standard errors; sigma is the "
         "chosen value's estimated error. Default auto: rebuild,input,spatial, but the rebuild alone with "
         "--rank-map (its map is of the rebuild) and --object-space (no image neighbours)");
@@ -191,6 +193,8 @@ nlohmann::ordered_json estimators_json(const denoise::EstimatorOptions& options,
         names.push_back("input");
     if (options.spatial)
         names.push_back("spatial");
+    if (options.non_local)
+        names.push_back("nlmeans");
     nlohmann::ordered_json json{
         {"set", names}, {"significance", options.significance}, {"radius", options.radius}};
     nlohmann::ordered_json frames = nlohmann::ordered_json::array();

@@ -179,13 +179,14 @@ void Collector::take_sink_rows(int frame_index, int row_begin, int row_end, cons
 
 namespace {
 // The estimator map's colour of each Estimator (estimator_choice.h): the
-// rebuild grey, the input red, the 1 px and 2 px blurs green and blue.
+// rebuild grey, the input red, the 1 px and 2 px blurs green and blue, the
+// non-local means yellow.
 constexpr std::array<std::array<float, 3>, denoise::kEstimators> kEstimatorColours{
-    {{0.35f, 0.35f, 0.35f}, {1.0f, 0.0f, 0.0f}, {0.0f, 0.8f, 0.0f}, {0.0f, 0.3f, 1.0f}}};
+    {{0.35f, 0.35f, 0.35f}, {1.0f, 0.0f, 0.0f}, {0.0f, 0.8f, 0.0f}, {0.0f, 0.3f, 1.0f}, {1.0f, 0.85f, 0.0f}}};
 } // namespace
 
 const char* const kEstimatorMapLabel =
-    "estimator map (grey: rebuild, red: input, green: 1 px blur, blue: 2 px blur)";
+    "estimator map (grey: rebuild, red: input, green: 1 px blur, blue: 2 px blur, yellow: non-local means)";
 
 void Collector::take_choice_rows(int frame_index, int row_begin, int row_end, const std::uint8_t* chosen)
 {

@@ -2,6 +2,7 @@
 
 #include "core/common/avx2_clones.h"
 #include "core/common/error.h"
+#include "core/denoise/non_local_means.h"
 
 #include <algorithm>
 #include <cmath>
@@ -202,6 +203,8 @@ std::string estimator_name(Estimator estimator)
         return "gauss1";
     case Estimator::Gauss2:
         return "gauss2";
+    case Estimator::NonLocal:
+        return "nlmeans";
     }
     return "?";
 }
@@ -216,9 +219,11 @@ EstimatorOptions parse_estimators(const std::string& list)
             options.input = true;
         else if (entry == "spatial")
             options.spatial = true;
+        else if (entry == "nlmeans")
+            options.non_local = true;
         else if (entry != "rebuild")
             throw usage_error("--estimators: unknown estimator '" + entry +
-                              "' (write rebuild, input, spatial)");
+                              "' (write rebuild, input, spatial, nlmeans)");
     }
     return options;
 }
@@ -230,7 +235,10 @@ int estimator_rebuilt_reach(const EstimatorOptions& options)
 
 int estimator_input_reach(const EstimatorOptions& options)
 {
-    return options.enabled() ? std::max(estimator_rebuilt_reach(options), options.radius + kGaussReach) : 0;
+    // The blurs' reach over the risk window; the non-local means' over its 3×3.
+    return options.enabled() ? std::max({estimator_rebuilt_reach(options), options.radius + kGaussReach,
+                                         1 + kNonLocalReach})
+                             : 0;
 }
 
 void ChoiceCounts::add(const ChoiceCounts& other)
@@ -258,7 +266,82 @@ struct Workspace {
         local_sure;
     std::vector<float> scratch, blur_sums;
     std::vector<double> column;
+    // The non-local means around rejected pixels: which rows were rejected, the
+    // pixels that need the filter, its values and per-pixel SURE, each pixel's
+    // sigma² sum (to move it in the counts).
+    std::vector<std::uint8_t> rejected, needed;
+    Plane non_local, non_local_sure;
+    std::vector<float> divergence;
+    std::vector<double> non_local_scratch, pixel_squared;
 };
+
+// Where the rebuild was rejected at rows [row, end), the non-local means takes
+// the place of the candidate taken if its SURE over the 3×3 pixels around is
+// lower (that candidate's is in local_sure; the rebuild's is never compared: a
+// rejected pixel with no linear candidate takes it). Sigma stays the displaced
+// candidate's. The filter runs only on the rejected pixels and their neighbours.
+void replace_by_non_local(const ChoiceFrame& frame, const Plane& variance, int row, int end, float* values,
+                          std::uint8_t* chosen_of_pixel, ChoiceCounts& counts, Workspace& work)
+{
+    const int width = frame.image.width, height = frame.image.height, channels = frame.image.channels;
+    const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
+    const int first = std::max(0, row - 1), last = std::min(height, end + 1);
+    auto& needed = work.needed;
+    needed.assign(static_cast<size_t>(last - first) * width, 0);
+    bool any = false;
+    for (int y = row; y < end; ++y)
+        for (int x = 0; x < width; ++x)
+            if (work.rejected[static_cast<size_t>(y - row) * width + x]) {
+                any = true;
+                for (int ny = std::max(first, y - 1); ny <= std::min(last - 1, y + 1); ++ny)
+                    for (int nx = std::max(0, x - 1); nx <= std::min(width - 1, x + 1); ++nx)
+                        needed[static_cast<size_t>(ny - first) * width + nx] = 1;
+            }
+    if (!any)
+        return;
+    const NonLocalInput input{width, height, channels, frame.input, frame.input_begin};
+    work.non_local.reset(first, last, width, channels), work.non_local_sure.reset(first, last, width, 1);
+    work.divergence.resize(static_cast<size_t>(channels));
+    for (int y = first; y < last; ++y) {
+        const float* noisy = frame.input + (y - frame.input_begin) * row_samples;
+        for (int x = 0; x < width; ++x) {
+            if (!needed[static_cast<size_t>(y - first) * width + x])
+                continue;
+            const float* v = variance.row(y) + static_cast<std::int64_t>(x) * channels;
+            float* value = work.non_local.row(y) + static_cast<std::int64_t>(x) * channels;
+            non_local_means(input, x, y, v, value, work.divergence.data(), work.non_local_scratch);
+            double sure = 0;
+            for (int c = 0; c < channels; ++c) {
+                const double d = static_cast<double>(value[c]) - noisy[x * channels + c];
+                sure += d * d - v[c] + 2.0 * v[c] * work.divergence[static_cast<size_t>(c)];
+            }
+            work.non_local_sure.row(y)[x] = static_cast<float>(sure / channels);
+        }
+    }
+    const auto& local_sure = work.local_sure;
+    for (int y = row; y < end; ++y)
+        for (int x = 0; x < width; ++x) {
+            const size_t pixel = static_cast<size_t>(y - row) * width + x;
+            if (!work.rejected[pixel])
+                continue;
+            double sum = 0;
+            int count = 0;
+            for (int ny = std::max(first, y - 1); ny <= std::min(last - 1, y + 1); ++ny)
+                for (int nx = std::max(0, x - 1); nx <= std::min(width - 1, x + 1); ++nx, ++count)
+                    sum += work.non_local_sure.row(ny)[nx];
+            const int displaced = chosen_of_pixel[pixel];
+            if (displaced != 0 && sum / count >= local_sure[static_cast<size_t>(displaced)].row(y)[x])
+                continue;
+            const float* value = work.non_local.row(y) + static_cast<std::int64_t>(x) * channels;
+            std::copy(value, value + channels,
+                      values + (y - row) * row_samples + static_cast<std::int64_t>(x) * channels);
+            chosen_of_pixel[pixel] = static_cast<std::uint8_t>(Estimator::NonLocal);
+            --counts.pixels[static_cast<size_t>(displaced)],
+                ++counts.pixels[static_cast<size_t>(Estimator::NonLocal)];
+            counts.squared_error[static_cast<size_t>(displaced)] -= work.pixel_squared[pixel];
+            counts.squared_error[static_cast<size_t>(Estimator::NonLocal)] += work.pixel_squared[pixel];
+        }
+}
 
 // choose_estimators for rows [row, end), one strip.
 MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options, const ChoiceFrame& frame,
@@ -391,7 +474,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
 
     // The one-sided test's planes: per pixel the channel mean of min(input −
     // rebuild, 0), and the noise scale; then their 3×3 means.
-    const bool below_test = frame.noise_scale != nullptr && (options.input || options.spatial);
+    const bool below_test = frame.noise_scale != nullptr && options.enabled();
     if (below_test) {
         Plane &below = work.below, &noise_scale = work.noise_scale;
         const int first = std::max(0, row - 1), last = std::min(height, end + 1);
@@ -422,6 +505,9 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     const double below_limit = options.below_significance * options.below_significance * kBelowDeviation *
                                kBelowDeviation; // × scale², as one product in the same order
     std::vector<double> floor(static_cast<size_t>(channels));
+    if (options.non_local)
+        work.rejected.assign(static_cast<size_t>(end - row) * width, 0),
+            work.pixel_squared.resize(work.rejected.size());
     for (int y = row; y < end; ++y) {
         // This row of every plane the choice reads (the pixel loop is the choice's hot spot).
         std::array<const float*, kEstimators> gain_mean{}, gain_square_mean{}, near_sure{}, square_mean{};
@@ -462,15 +548,19 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 if (significant(mean, mean, gain_square_mean[k][x]) && (chosen == 0 || local < least))
                     chosen = k, least = local;
             }
+            bool rejected = chosen != 0; // the rebuild: by a candidate's gain, or by the one-sided test
             if (chosen == 0 && below_test) {
                 const int near = clipped_window(width, height, x, y, 1);
                 const double scale = scale_row[x];
                 const double excess = below_row[x] + kBelowMean * scale;
-                if (excess < 0 && excess * excess * near > below_limit * scale * scale)
+                rejected = excess < 0 && excess * excess * near > below_limit * scale * scale;
+                if (rejected)
                     for (int k = 1; k < kEstimators; ++k)
                         if (used[k] && (chosen == 0 || near_sure[k][x] < least))
                             chosen = k, least = near_sure[k][x];
             }
+            if (options.non_local && rejected)
+                work.rejected[static_cast<size_t>(y - row) * width + x] = 1;
             // Sigma: the chosen one's variance part, plus its pooled SURE's excess where significant.
             double floor_sum = 0;
             for (int c = 0; c < channels; ++c) {
@@ -499,11 +589,15 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 pixel_squared += squared;
             }
             counts.squared_error[chosen] += pixel_squared;
+            if (options.non_local)
+                work.pixel_squared[static_cast<size_t>(y - row) * width + x] = pixel_squared;
             chosen_of_pixel[static_cast<std::int64_t>(y - row) * width + x] =
                 static_cast<std::uint8_t>(chosen);
             ++counts.pixels[chosen];
         }
     }
+    if (options.non_local)
+        replace_by_non_local(frame, variance, row, end, values, chosen_of_pixel, counts, work);
     // The roots in one loop that vectorises (one at a time they were a tenth of the choice).
     const std::int64_t samples = (end - row) * row_samples;
     for (std::int64_t i = 0; i < samples; ++i)

@@ -12,11 +12,10 @@
 // is an unbiased estimate of (f − x)². w is the rebuild's kept noise h (the
 // leverage; under the mode filter its kept-noise gain Σ V²·Σa² stands in for the
 // divergence Σ V²·a_pp, which it is below: a known simplification), a
-// Gaussian's centre weight, 1 for the input (S = v). y is the input as read (NaN/Inf cleaned, not fireflies: the
-// temporal firefly clamp hides the rebuild's errors where the light moves). v is
-// the windowed mean of the squared 4-neighbour high-pass of the residual
-// y − rebuild, divided by 1 + 1/k for k neighbours: a mean (not a median), so
-// that v is the variance of the very samples SURE sees.
+// Gaussian's centre weight, 1 for the input (S = v). y is the input as read (NaN/Inf cleaned, not fireflies:
+// the temporal firefly clamp hides the rebuild's errors where the light moves). v is the windowed mean of the
+// squared 4-neighbour high-pass of the residual y − rebuild, divided by 1 + 1/k for k neighbours: a mean (not
+// a median), so that v is the variance of the very samples SURE sees.
 //
 // The rebuild is kept unless another estimator's pooled SURE is lower by more
 // than z standard errors of the window mean of the per-pixel difference. SURE of
@@ -38,6 +37,12 @@
 // mean of squares, so a heavy upper tail widens it: the test is conservative
 // where the noise is heavy-tailed (on indirect light it changed 0.03 % of the
 // pixels of one benchmark shot and none of six others).
+// Non-local means of the input (non_local_means.h; --estimators …,nlmeans, not
+// in the default) keeps the hard edges a Gaussian blurs, but its SURE is biased
+// low on rendered noise, so it is never evidence against the rebuild: where the
+// rebuild has been rejected (by a linear candidate's significant gain or by the
+// one-sided test) it replaces the candidate taken if its 3×3 SURE is lower, and
+// keeps that candidate's sigma. It is computed only around rejected pixels.
 // Sigma of the chosen estimator is its known variance part (the rebuild: the
 // engine's sigma²; a Gaussian: v·Σw²; the input: v), raised to its pooled SURE
 // where that is larger by z standard errors (the bias the variance part misses).
@@ -53,25 +58,26 @@
 namespace modestack::denoise {
 
 /// The estimators a choice can take, in the order reports list them.
-enum class Estimator { Rebuild, Input, Gauss1, Gauss2 };
-inline constexpr int kEstimators = 4;
+enum class Estimator { Rebuild, Input, Gauss1, Gauss2, NonLocal };
+inline constexpr int kEstimators = 5;
 
-/// The name users write: "rebuild", "input", "gauss1", "gauss2".
+/// The name users write: "rebuild", "input", "gauss1", "gauss2", "nlmeans".
 std::string estimator_name(Estimator estimator);
 
 /// Settings of the choice (--estimators).
 struct EstimatorOptions {
     bool input = false;        ///< the input itself is a candidate
     bool spatial = false;      ///< Gaussian blurs of the input (1 and 2 px) are candidates
+    bool non_local = false; ///< non-local means of the input may replace a candidate taken (not the rebuild)
     double significance = 2.0; ///< z: standard errors a switch away from the rebuild needs
     int radius = 3;            ///< risk window radius (3: 7×7 pixels)
     /// z of the one-sided test that rejects the rebuild where the input lies far
     /// below it over 3×3 pixels, in the noise's own scale (see the file comment).
     double below_significance = 6.0;
-    bool enabled() const { return input || spatial; }
+    bool enabled() const { return input || spatial || non_local; }
 };
 
-/// Parses a comma-separated list of "rebuild", "input", "spatial" (rebuild is
+/// Parses a comma-separated list of "rebuild", "input", "spatial", "nlmeans" (rebuild is
 /// always there); throws a usage error naming a bad entry.
 EstimatorOptions parse_estimators(const std::string& list);
 

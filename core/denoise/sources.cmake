@@ -6,7 +6,8 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/feature_guide.cpp
   ${CMAKE_CURRENT_LIST_DIR}/filter_weights.cpp
   ${CMAKE_CURRENT_LIST_DIR}/guided_filter.cpp
-  ${CMAKE_CURRENT_LIST_DIR}/mode_filter.cpp)
+  ${CMAKE_CURRENT_LIST_DIR}/mode_filter.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/non_local_means.cpp)
 target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/non_negative.cpp
   ${CMAKE_CURRENT_LIST_DIR}/rank_map.cpp

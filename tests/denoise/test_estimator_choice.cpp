@@ -14,6 +14,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <string>
 #include <vector>
 
 using namespace modestack;
@@ -111,6 +112,8 @@ TEST_CASE("estimators: the list is parsed, and a bad entry is a usage error nami
     CHECK_FALSE(parse_estimators("rebuild").enabled());
     CHECK(parse_estimators("rebuild,input").input);
     CHECK(parse_estimators("spatial").spatial);
+    CHECK(parse_estimators("rebuild,nlmeans").non_local);
+    CHECK(parse_estimators("nlmeans").enabled());
     try {
         parse_estimators("rebuild,median");
         FAIL("no error");
@@ -289,7 +292,9 @@ struct WallFrame {
     }
     size_t at(int x, int y, int c = 0) const { return (static_cast<size_t>(y) * width + x) * channels + c; }
     // The estimator taken at each pixel, with or without the noise scale (the one-sided test).
-    std::vector<std::uint8_t> choose(bool with_noise_scale, std::vector<float>* values = nullptr) const
+    std::vector<std::uint8_t> choose(bool with_noise_scale, std::vector<float>* values = nullptr,
+                                     const std::string& estimators = "rebuild,input,spatial",
+                                     std::vector<float>* sigma_of_values = nullptr) const
     {
         ChoiceFrame frame;
         frame.image = {width, height, channels};
@@ -299,10 +304,12 @@ struct WallFrame {
         frame.rebuilt_begin = 0, frame.rebuilt_end = height;
         std::vector<float> chosen_values(input.size()), chosen_sigma(input.size());
         std::vector<std::uint8_t> chosen(static_cast<size_t>(width) * height);
-        choose_estimators(parse_estimators("rebuild,input,spatial"), frame, 0, height, chosen_values.data(),
+        choose_estimators(parse_estimators(estimators), frame, 0, height, chosen_values.data(),
                           chosen_sigma.data(), chosen.data());
         if (values)
             *values = chosen_values;
+        if (sigma_of_values)
+            *sigma_of_values = chosen_sigma;
         return chosen;
     }
 };
@@ -336,6 +343,47 @@ TEST_CASE(
     }
     CHECK(taken(with_test, firefly_x, firefly_y) == Estimator::Rebuild);
     CHECK(values[wall.at(firefly_x, firefly_y)] == doctest::Approx(0.5f));
+}
+
+TEST_CASE("estimators: non-local means only replaces a candidate where the rebuild was rejected, and keeps a "
+          "shadow's edge the blurs smear")
+{
+    WallFrame wall(0.02f, 3);
+    // A hard shadow (0.075, the wall's 0.5 × 0.15) over columns [24, 40) that the
+    // rebuild fills with the wall's light, as where a key light moves.
+    auto truth = [](int x) { return x >= 24 && x < 40 ? 0.075f : 0.5f; };
+    for (int y = 0; y < wall.height; ++y)
+        for (int x = 24; x < 40; ++x)
+            for (int c = 0; c < 3; ++c)
+                wall.input[wall.at(x, y, c)] += 0.075f - 0.5f;
+    std::vector<float> without_values, with_values, without_sigma, with_sigma;
+    const auto without = wall.choose(true, &without_values, "rebuild,input,spatial", &without_sigma);
+    const auto with = wall.choose(true, &with_values, "rebuild,input,spatial,nlmeans", &with_sigma);
+    int replaced = 0;
+    double edge_without = 0, edge_with = 0;
+    for (int y = 0; y < wall.height; ++y)
+        for (int x = 0; x < wall.width; ++x) {
+            const size_t pixel = static_cast<size_t>(y) * wall.width + x;
+            if (static_cast<Estimator>(with[pixel]) == Estimator::NonLocal) {
+                ++replaced;
+                CHECK(static_cast<Estimator>(without[pixel]) != Estimator::Rebuild);
+                for (int c = 0; c < 3; ++c)
+                    CHECK(with_sigma[wall.at(x, y, c)] >= without_sigma[wall.at(x, y, c)]);
+            } else {
+                CHECK(with[pixel] == without[pixel]);
+                CHECK(with_values[wall.at(x, y)] == without_values[wall.at(x, y)]);
+            }
+            if (y >= 8 && y < 40 && (x == 23 || x == 24 || x == 39 || x == 40))
+                for (int c = 0; c < 3; ++c) {
+                    const double a = without_values[wall.at(x, y, c)] - truth(x),
+                                 b = with_values[wall.at(x, y, c)] - truth(x);
+                    edge_without += a * a, edge_with += b * b;
+                }
+        }
+    CHECK(replaced > 0);
+    CAPTURE(edge_without);
+    CAPTURE(edge_with);
+    CHECK(edge_with < 0.5 * edge_without); // the shadow's edge columns
 }
 
 TEST_CASE("estimators: on pure noise around an unbiased rebuild the one-sided test never fires")
