@@ -266,20 +266,21 @@ struct Workspace {
         local_sure;
     std::vector<float> scratch, blur_sums;
     std::vector<double> column;
-    // The non-local means around rejected pixels: which rows were rejected, the
-    // pixels that need the filter, its values and per-pixel SURE, each pixel's
+    // The non-local means around the pixels it may take: those pixels (`biased`),
+    // the pixels that need the filter, its values and per-pixel SURE, each pixel's
     // sigma² sum (to move it in the counts).
-    std::vector<std::uint8_t> rejected, needed;
+    std::vector<std::uint8_t> biased, needed;
     Plane non_local, non_local_sure;
     std::vector<float> divergence;
     std::vector<double> non_local_scratch, pixel_squared;
 };
 
-// Where the rebuild was rejected at rows [row, end), the non-local means takes
-// the place of the candidate taken if its SURE over the 3×3 pixels around is
-// lower (that candidate's is in local_sure; the rebuild's is never compared: a
-// rejected pixel with no linear candidate takes it). Sigma stays the displaced
-// candidate's. The filter runs only on the rejected pixels and their neighbours.
+// At the pixels of rows [row, end) where it may (work.biased: the rebuild was
+// rejected and the candidate taken is biased), the non-local means takes the
+// candidate's place if its SURE over the 3×3 pixels around is lower (the
+// candidate's is in local_sure; the rebuild's is never compared: a rejected
+// pixel with no linear candidate takes it). Sigma stays the displaced
+// candidate's. The filter runs only on those pixels and their neighbours.
 void replace_by_non_local(const ChoiceFrame& frame, const Plane& variance, int row, int end, float* values,
                           std::uint8_t* chosen_of_pixel, ChoiceCounts& counts, Workspace& work)
 {
@@ -291,7 +292,7 @@ void replace_by_non_local(const ChoiceFrame& frame, const Plane& variance, int r
     bool any = false;
     for (int y = row; y < end; ++y)
         for (int x = 0; x < width; ++x)
-            if (work.rejected[static_cast<size_t>(y - row) * width + x]) {
+            if (work.biased[static_cast<size_t>(y - row) * width + x]) {
                 any = true;
                 for (int ny = std::max(first, y - 1); ny <= std::min(last - 1, y + 1); ++ny)
                     for (int nx = std::max(0, x - 1); nx <= std::min(width - 1, x + 1); ++nx)
@@ -322,7 +323,7 @@ void replace_by_non_local(const ChoiceFrame& frame, const Plane& variance, int r
     for (int y = row; y < end; ++y)
         for (int x = 0; x < width; ++x) {
             const size_t pixel = static_cast<size_t>(y - row) * width + x;
-            if (!work.rejected[pixel])
+            if (!work.biased[pixel])
                 continue;
             double sum = 0;
             int count = 0;
@@ -506,8 +507,8 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                                kBelowDeviation; // × scale², as one product in the same order
     std::vector<double> floor(static_cast<size_t>(channels));
     if (options.non_local)
-        work.rejected.assign(static_cast<size_t>(end - row) * width, 0),
-            work.pixel_squared.resize(work.rejected.size());
+        work.biased.assign(static_cast<size_t>(end - row) * width, 0),
+            work.pixel_squared.resize(work.biased.size());
     for (int y = row; y < end; ++y) {
         // This row of every plane the choice reads (the pixel loop is the choice's hot spot).
         std::array<const float*, kEstimators> gain_mean{}, gain_square_mean{}, near_sure{}, square_mean{};
@@ -559,8 +560,6 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                         if (used[k] && (chosen == 0 || near_sure[k][x] < least))
                             chosen = k, least = near_sure[k][x];
             }
-            if (options.non_local && rejected)
-                work.rejected[static_cast<size_t>(y - row) * width + x] = 1;
             // Sigma: the chosen one's variance part, plus its pooled SURE's excess where significant.
             double floor_sum = 0;
             for (int c = 0; c < channels; ++c) {
@@ -576,6 +575,11 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             const double risk = pooled_sure[x] - (chosen == 0 ? 0.0 : gain_mean[chosen][x]);
             const double excess =
                 significant(risk - floor_mean, risk, square_mean[chosen][x]) ? risk - floor_mean : 0;
+            // The non-local means may displace the candidate taken only where that
+            // candidate's own risk shows a bias its variance part does not explain
+            // (a blur across an edge), or where no linear candidate could be taken.
+            if (options.non_local && rejected && (chosen == 0 || excess > 0))
+                work.biased[static_cast<size_t>(y - row) * width + x] = 1;
             const float* source = chosen == 0   ? rebuilt_at(y)
                                   : chosen == 1 ? input_at(y)
                                                 : blurred[chosen - 2].row(y);

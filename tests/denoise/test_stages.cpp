@@ -213,7 +213,7 @@ TEST_CASE("stages: with the estimator choice the staged run still gives the bits
     for (std::int64_t memory : {std::int64_t(1) << 30, std::int64_t(1'900'000)}) {
         CAPTURE(memory);
         Settings settings;
-        settings.estimators = parse_estimators("rebuild,input,spatial");
+        settings.estimators = parse_estimators("rebuild,input,spatial,nlmeans");
         settings.max_memory_bytes = memory;
         check_same_bits(shot, settings);
     }

@@ -461,7 +461,7 @@ TEST_CASE("denoise --estimators: a shadow that sweeps comes out better than the 
     CHECK(chosen_error < 0.7 * plain_error);
     CHECK(chosen_error < 0.01);
     auto estimators = load_json(dir.file("s.json"))["method"]["estimators"];
-    CHECK(estimators["set"] == nlohmann::json::array({"rebuild", "input", "spatial"}));
+    CHECK(estimators["set"] == nlohmann::json::array({"rebuild", "input", "spatial", "nlmeans"}));
     REQUIRE(estimators["frames"].size() == kFrames);
     for (const auto& frame : estimators["frames"]) {
         double total = 0;
