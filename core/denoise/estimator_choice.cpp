@@ -337,8 +337,8 @@ void replace_by_non_local(const ChoiceFrame& frame, const Plane& variance, int r
             std::copy(value, value + channels,
                       values + (y - row) * row_samples + static_cast<std::int64_t>(x) * channels);
             chosen_of_pixel[pixel] = static_cast<std::uint8_t>(Estimator::NonLocal);
-            --counts.pixels[static_cast<size_t>(displaced)],
-                ++counts.pixels[static_cast<size_t>(Estimator::NonLocal)];
+            --counts.pixels[static_cast<size_t>(displaced)];
+            ++counts.pixels[static_cast<size_t>(Estimator::NonLocal)];
             counts.squared_error[static_cast<size_t>(displaced)] -= work.pixel_squared[pixel];
             counts.squared_error[static_cast<size_t>(Estimator::NonLocal)] += work.pixel_squared[pixel];
         }
@@ -506,9 +506,10 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     const double below_limit = options.below_significance * options.below_significance * kBelowDeviation *
                                kBelowDeviation; // × scale², as one product in the same order
     std::vector<double> floor(static_cast<size_t>(channels));
-    if (options.non_local)
-        work.biased.assign(static_cast<size_t>(end - row) * width, 0),
-            work.pixel_squared.resize(work.biased.size());
+    if (options.non_local) {
+        work.biased.assign(static_cast<size_t>(end - row) * width, 0);
+        work.pixel_squared.resize(work.biased.size());
+    }
     for (int y = row; y < end; ++y) {
         // This row of every plane the choice reads (the pixel loop is the choice's hot spot).
         std::array<const float*, kEstimators> gain_mean{}, gain_square_mean{}, near_sure{}, square_mean{};
