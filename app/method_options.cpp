@@ -56,8 +56,7 @@ void add_method_options(CLI::App& command, MethodOptions& options)
         "rejected); 'rebuild' alone turns the choice off. "
         "The rebuild is kept unless another's risk (SURE, 7x7) is lower by 2 standard errors; sigma is the "
         "chosen value's estimated error. Default auto: rebuild,input,spatial,nlmeans, but the rebuild alone "
-        "with "
-        "--rank-map (its map is of the rebuild) and --object-space (no image neighbours)");
+        "with --rank-map (its map is of the rebuild) and --object-space (no image neighbours)");
 }
 
 void apply_training_frames(const MethodOptions& options, const std::vector<int>& frame_numbers,

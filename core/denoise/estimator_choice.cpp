@@ -249,6 +249,13 @@ void ChoiceCounts::add(const ChoiceCounts& other)
 
 namespace {
 
+// One sample's SURE for an estimate with derivative `slope` at the sample (the
+// file comment of estimator_choice.h): (f − y)² − v + 2·v·w.
+inline double sample_sure(double estimate, double sample, double v, double slope)
+{
+    return (estimate - sample) * (estimate - sample) - v + 2 * v * slope;
+}
+
 // Pixels of the (2·radius + 1)² window around (x, y), clipped to the image.
 int clipped_window(int width, int height, int x, int y, int radius)
 {
@@ -312,10 +319,9 @@ void replace_by_non_local(const ChoiceFrame& frame, const Plane& variance, int r
             float* value = work.non_local.row(y) + static_cast<std::int64_t>(x) * channels;
             non_local_means(input, x, y, v, value, work.divergence.data(), work.non_local_scratch);
             double sure = 0;
-            for (int c = 0; c < channels; ++c) {
-                const double d = static_cast<double>(value[c]) - noisy[x * channels + c];
-                sure += d * d - v[c] + 2.0 * v[c] * work.divergence[static_cast<size_t>(c)];
-            }
+            for (int c = 0; c < channels; ++c)
+                sure += sample_sure(value[c], noisy[x * channels + c], v[c],
+                                    work.divergence[static_cast<size_t>(c)]);
             work.non_local_sure.row(y)[x] = static_cast<float>(sure / channels);
         }
     }
@@ -437,12 +443,12 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
                 const double input = input_at(y)[i], v = variance.row(y)[i];
                 const double rebuilt = rebuilt_at(y)[i];
-                pixel_sure[0] += (rebuilt - input) * (rebuilt - input) - v + 2 * v * kept_at(y, i);
+                pixel_sure[0] += sample_sure(rebuilt, input, v, kept_at(y, i));
                 pixel_sure[1] += v;
                 for (int g = 0; g < 2 && options.spatial; ++g) {
                     const double blur = blurred[g].row(y)[i];
                     const double centre = kernel_x[g].centre[x] * kernel_y[g].centre[y];
-                    pixel_sure[2 + g] += (blur - input) * (blur - input) - v + 2 * v * centre;
+                    pixel_sure[2 + g] += sample_sure(blur, input, v, centre);
                 }
             }
             for (int k = 0; k < kEstimators; ++k)

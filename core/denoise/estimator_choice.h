@@ -44,7 +44,7 @@
 // test) and the candidate taken shows a significant bias (its pooled SURE above
 // its variance part, as for sigma), it takes that candidate's place if its 3×3
 // SURE is lower, and keeps that candidate's sigma. Letting it replace unbiased
-// candidates too made the indirect light 2–25 % worse. It is computed only
+// candidates too made the indirect light 2–28 % worse. It is computed only
 // around those pixels.
 // Sigma of the chosen estimator is its known variance part (the rebuild: the
 // engine's sigma²; a Gaussian: v·Σw²; the input: v), raised to its pooled SURE
@@ -71,8 +71,7 @@ std::string estimator_name(Estimator estimator);
 struct EstimatorOptions {
     bool input = false;        ///< the input itself is a candidate
     bool spatial = false;      ///< Gaussian blurs of the input (1 and 2 px) are candidates
-    bool non_local =
-        false; ///< non-local means of the input may replace a biased candidate taken (not the rebuild)
+    bool non_local = false;    ///< non-local means may replace a biased candidate taken (not the rebuild)
     double significance = 2.0; ///< z: standard errors a switch away from the rebuild needs
     int radius = 3;            ///< risk window radius (3: 7×7 pixels)
     /// z of the one-sided test that rejects the rebuild where the input lies far
