@@ -359,13 +359,23 @@ TEST_CASE("denoise --update-beauty: threads, a streamed run and farm stages writ
            dir.file("kept.json"));
     const nlohmann::json kept = load_json(dir.file("kept.json"));
     CHECK(kept["in_memory"] == true);
-    run_ok(denoise + fmt::format("--no-mode-filter --max-memory {} -o {} --json {}",
-                                 kept["memory_held_bytes"].get<std::int64_t>() + 2'300'000,
-                                 dir.file("streamed/d.####.exr"), dir.file("streamed.json")));
-    const nlohmann::json streamed = load_json(dir.file("streamed.json"));
+    // Under heavy load the resident size of a run has come out more than 0.5 MB below the kept
+    // run's, so that the shot fit: then the budget is lowered by 0.3 MB and the run repeated
+    // (lower is safe: the program came out smaller, so the band fits all the more).
+    std::int64_t budget = kept["memory_held_bytes"].get<std::int64_t>() + 2'300'000;
+    nlohmann::json streamed;
+    std::string streamed_dir;
+    for (int attempt = 1; attempt <= 3; ++attempt, budget -= 300'000) {
+        streamed_dir = dir.file("streamed" + std::to_string(attempt));
+        run_ok(denoise + fmt::format("--no-mode-filter --max-memory {} -o {}/d.####.exr --json {}.json",
+                                     budget, streamed_dir, streamed_dir));
+        streamed = load_json(streamed_dir + ".json");
+        if (streamed["in_memory"] == false)
+            break;
+    }
     CHECK(streamed["in_memory"] == false);
     CHECK(streamed["beauty"]["updated"] == true);
-    check_same_outputs(dir.file("kept/d"), dir.file("streamed/d"));
+    check_same_outputs(dir.file("kept/d"), streamed_dir + "/d");
 
     // The farm: statistics, solve, survey, modes, then two write tasks.
     run_ok(denoise + "--stage stats --rows 1/2 -o " + dir.file("s1.stats"));
