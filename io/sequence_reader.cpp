@@ -118,6 +118,27 @@ std::unique_ptr<detail::OpenFrame> open_frame(const std::string& file, int frame
     return frame;
 }
 
+// Converts one channel of `pixels` native pixels (`stride` bytes apart, the
+// first value at `source`) to float, into every `count`-th float of
+// `destination`: the values OIIO gives when asked for floats.
+void native_channel_to_floats(OIIO::TypeDesc type, const unsigned char* source, size_t stride, size_t pixels,
+                              float* destination, size_t count)
+{
+    if (type == OIIO::TypeHalf) { // EXR's usual type: a table lookup, no dispatch per value
+        for (size_t p = 0; p < pixels; ++p) {
+            Imath::half value;
+            std::memcpy(&value, source + p * stride, sizeof value);
+            destination[p * count] = static_cast<float>(value);
+        }
+    } else if (type == OIIO::TypeFloat) {
+        for (size_t p = 0; p < pixels; ++p)
+            std::memcpy(destination + p * count, source + p * stride, sizeof(float));
+    } else {
+        for (size_t p = 0; p < pixels; ++p)
+            OIIO::convert_pixel_values(type, source + p * stride, OIIO::TypeFloat, destination + p * count);
+    }
+}
+
 // Reads rows of channels [channel_begin, channel_end) of one scanline or tiled
 // part (its own channel indices) in `type`, tightly packed.
 void read_part_rows(const detail::OpenFrame& frame, const detail::OpenPart& part, int row_begin, int row_end,
@@ -279,19 +300,22 @@ void SequenceReader::read_selected(int frame_index, int row_begin, int row_end, 
         halves_to_floats(halves.data(), destination, values);
         return;
     }
-    if (contiguous) {
-        read_rows(frame, row_begin, row_end, channel_begin, channel_end, OIIO::TypeFloat, destination);
-        return;
-    }
-    // Selected channels are scattered: read the span that covers them, then pick.
-    int span = channel_end - channel_begin;
-    size_t pixels = static_cast<size_t>(m_width) * (row_end - row_begin);
-    std::vector<float> covering(pixels * span);
-    read_rows(frame, row_begin, row_end, channel_begin, channel_end, OIIO::TypeFloat, covering.data());
-    size_t count = selected.size();
-    for (size_t p = 0; p < pixels; ++p)
-        for (size_t c = 0; c < count; ++c)
-            destination[p * count + c] = covering[p * span + (selected[c] - channel_begin)];
+    // Anything else (float or mixed types, scattered channels): the native values
+    // of the span that covers the selection, converted channel by channel. Read
+    // natively, a ZIP part goes through libdeflate; asked for floats, OIIO would
+    // decode it again through OpenEXR's zlib.
+    thread_local std::vector<unsigned char> span;
+    const size_t pixels = static_cast<size_t>(m_width) * (row_end - row_begin);
+    const size_t span_begin = frame.byte_offset[channel_begin];
+    const size_t span_bytes =
+        (channel_end < frame.spec.nchannels ? frame.byte_offset[channel_end] : frame.native_pixel_bytes) -
+        span_begin;
+    span.resize(pixels * span_bytes);
+    read_rows(frame, row_begin, row_end, channel_begin, channel_end, OIIO::TypeUnknown, span.data());
+    for (size_t k = 0; k < selected.size(); ++k)
+        native_channel_to_floats(frame.spec.channelformat(selected[k]),
+                                 span.data() + (frame.byte_offset[selected[k]] - span_begin), span_bytes,
+                                 pixels, destination + k, selected.size());
 }
 
 void SequenceReader::read_native(int frame_index, int row_begin, int row_end,
@@ -307,25 +331,10 @@ void SequenceReader::selected_from_native(int frame_index, const unsigned char* 
 {
     const detail::OpenFrame& frame = *m_frames.at(frame_index);
     const std::size_t count = frame.selected.size();
-    for (std::size_t k = 0; k < count; ++k) {
-        const int channel = frame.selected[k];
-        const OIIO::TypeDesc type = frame.spec.channelformat(channel);
-        const unsigned char* source = native + frame.byte_offset[channel];
-        const std::size_t stride = frame.native_pixel_bytes;
-        if (type == OIIO::TypeHalf) {  // EXR's usual type: a table lookup, no dispatch per value
-            for (std::size_t p = 0; p < pixels; ++p) {
-                Imath::half value;
-                std::memcpy(&value, source + p * stride, sizeof value);
-                destination[p * count + k] = static_cast<float>(value);
-            }
-        } else if (type == OIIO::TypeFloat) {
-            for (std::size_t p = 0; p < pixels; ++p)
-                std::memcpy(destination + p * count + k, source + p * stride, sizeof(float));
-        } else {
-            for (std::size_t p = 0; p < pixels; ++p)
-                OIIO::convert_pixel_values(type, source + p * stride, OIIO::TypeFloat, destination + p * count + k);
-        }
-    }
+    for (std::size_t k = 0; k < count; ++k)
+        native_channel_to_floats(frame.spec.channelformat(frame.selected[k]),
+                                 native + frame.byte_offset[frame.selected[k]], frame.native_pixel_bytes,
+                                 pixels, destination + k, count);
 }
 
 bool SequenceReader::has_unselected_channels(int frame_index) const
