@@ -1,7 +1,8 @@
 // `modestack run`: the main job end to end (issue 6, README command one).
 // Renders the noisy pass of a built-in scene, denoises its indirect and its
-// direct layer in one run (each on its own modes, auto rank), refines the unsure
-// indirect pixels at high spp, composites the final beauty
+// direct layer in one run (each on its own modes, auto rank), re-renders the
+// indirect pixels where that pays (refine --by-gain, unless --budget or
+// --threshold is given) at high spp, composites the final beauty
 // = DiffCol × (DiffDir + DiffInd) + Emit ([0017]) and writes a summary and a
 // contact sheet. Each stage is the library call behind the subcommand a user
 // would type (render_job.h, denoise_job.h, refine_job.h), given the options
@@ -47,11 +48,13 @@ struct RunOptions {
     std::string directory = "out/run";
     std::string size = "320x240";
     std::string frames;
-    int spp = 4;
+    int spp = 8;
     int refine_spp = 256;
-    double budget_percent = 2.0;
-    double threshold = -1; ///< > 0: use it instead of the budget
-    bool by_gain = false;  ///< --by-gain instead of the budget
+    // Refine by gain unless one of these is given (docs/design.md, "Which
+    // pixels refine re-renders"): at a few spp the samples pay more in the noisy
+    // pass than in re-rendered pixels, and the gain rule says where they do not.
+    double budget_percent = -1; ///< >= 0: re-render this % of the shot's pixels
+    double threshold = -1;      ///< > 0: re-render pixels whose relative sigma is at least this
     int reference_spp = 0;
     double exposure = 0.0;
     std::string display;
@@ -160,10 +163,10 @@ int run_run(const RunOptions& options)
     refine_options.settings.render.spp = options.refine_spp;
     if (options.threshold > 0)
         refine_options.threshold = options.threshold;
-    else if (options.by_gain)
-        refine_options.by_gain = true;
-    else
+    else if (options.budget_percent >= 0)
         refine_options.budget_percent = options.budget_percent;
+    else
+        refine_options.by_gain = true;
     const RefineResult refine_result = refine(make_refine_job(refine_options), options.common);
     write_json(json_file("refine.json"), refine_json(refine_result));
     if (!options.common.quiet)
@@ -282,19 +285,22 @@ Subcommand add_run_command(CLI::App& parent)
         ->check(CLI::PositiveNumber);
     auto* budget = command
                        ->add_option("--budget", options->budget_percent,
-                                    "Re-render this % of the shot's pixels (the most unsure ones)")
-                       ->check(CLI::Range(0.0, 100.0));
+                                    "Instead of by gain: re-render this % of the shot's pixels (the most "
+                                    "unsure ones)")
+                       ->check(CLI::Range(0.0, 100.0))
+                       ->default_str("");
     auto* threshold =
         command
             ->add_option("--threshold", options->threshold,
-                         "Instead of --budget: re-render pixels whose relative sigma is at least this")
+                         "Instead of by gain: re-render pixels whose relative sigma is at least this")
             ->check(CLI::PositiveNumber)
+            ->default_str("")
             ->excludes(budget);
+    // The default since 2026-12-05; the flag stays for the scripts that name it.
     command
-        ->add_flag(
-            "--by-gain", options->by_gain,
-            "Instead of --budget: refine's --by-gain (re-render where that removes more error than the "
-            "same samples spread over the shot)")
+        ->add_flag("--by-gain",
+                   "The default: refine's --by-gain (re-render where that removes more error than the same "
+                   "samples spread over the shot)")
         ->excludes(budget)
         ->excludes(threshold);
     command

@@ -281,10 +281,10 @@ TEST_CASE(
     }
 }
 
-TEST_CASE("run writes every output and the same pixels for --threads 1 and 2")
+TEST_CASE("run writes every output and the same pixels for --threads 1 and 2, refining by gain by default")
 {
     TempDir dir;
-    std::string common = "run --scene switch --size 32x24 --frames 30-37 --refine-spp 16 --budget 5 -q ";
+    std::string common = "run --scene switch --size 32x24 --frames 30-37 --refine-spp 16 -q ";
     auto one = run_modestack(common + "--threads 1 -o " + dir.file("one"));
     REQUIRE_MESSAGE(one.exit_code == 0, one.err);
     auto two = run_modestack(common + "--threads 2 --reference-spp 32 -o " + dir.file("two"));
@@ -333,6 +333,10 @@ TEST_CASE("run writes every output and the same pixels for --threads 1 and 2")
     std::ifstream json_file(dir.file("two/summary.json"));
     auto summary = nlohmann::json::parse(json_file);
     CHECK(summary["rank"].get<int>() >= 1);
+    // By default the samples go to an 8-spp noisy pass and refine re-renders only where that pays.
+    CHECK(summary["spp"].get<int>() == 8);
+    CHECK(summary["refine_selection"] == "gain");
+    CHECK(summary["refine_budget_percent"].is_null());
     CHECK(summary["percent_pixels_refined"].get<double>() > 0);
     for (const char* stage : {"render", "denoise", "refine", "composite", "reference"})
         CHECK(summary["seconds"][stage].get<double>() > 0);
