@@ -58,6 +58,18 @@ LayerAndSigma::LayerAndSigma(std::size_t pixel_count)
 void LayerAndSigma::read(const io::SequenceReader& reader, int frame_index)
 {
     reader.read_selected(frame_index, 0, reader.height(), rows.data());
+    split_rows();
+}
+
+void LayerAndSigma::from_native(const io::SequenceReader& reader, int frame_index,
+                                const unsigned char* native)
+{
+    reader.selected_from_native(frame_index, native, pixels, rows.data());
+    split_rows();
+}
+
+void LayerAndSigma::split_rows()
+{
     for (std::size_t p = 0; p < pixels; ++p)
         for (int c = 0; c < 3; ++c) {
             value[p * 3 + c] = rows[p * 6 + c];

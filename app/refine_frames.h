@@ -31,10 +31,15 @@ struct LayerAndSigma {
     explicit LayerAndSigma(std::size_t pixel_count);
     /// Reads frame `frame_index` into rows, value and sigma.
     void read(const io::SequenceReader& reader, int frame_index);
+    /// The same from the frame's native rows (SequenceReader::read_native), not decoding it again.
+    void from_native(const io::SequenceReader& reader, int frame_index, const unsigned char* native);
     /// Puts value and sigma back into rows, for FrameOutput::write_replaced_rows.
     void store();
     std::size_t pixels;
     std::vector<float> rows, value, sigma;
+
+private:
+    void split_rows(); ///< rows (value and sigma interleaved per pixel) into value and sigma
 };
 
 /// --budget: one read of every frame to find the score threshold that selects

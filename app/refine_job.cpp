@@ -22,6 +22,7 @@
 
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -167,7 +168,9 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
     RunContext context(context_options);
     double seconds_scoring = 0;
     refine::RefineSettings settings = job.settings;
-    std::unique_ptr<io::SequenceReader> variance_reader; // Gain: the input's variance of the mean
+    // Gain: the input's variance of the mean. This reader checks that every frame has it and
+    // names its channels; the values come from the layer reader's native rows.
+    std::unique_ptr<io::SequenceReader> variance_reader;
     float threshold = static_cast<float>(job.threshold);
     if (job.selection == RefineSelection::Budget) {
         threshold = budget_threshold(reader, job.budget_percent, settings.dark_floor, context.progress(),
@@ -204,15 +207,27 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
     for (int i = 0; i < reader.frame_count(); ++i) {
         throw_if_cancelled();
         const int frame = input.frames[i];
-        layer.read(reader, i);
-        if (variance_reader)
-            variance_reader->read_selected(i, 0, height, variance.data());
+        // Decoded once: the layer, its sigma and its variance come from the native rows the
+        // output copies its other channels from.
+        reader.read_native(i, 0, height, native);
+        layer.from_native(reader, i, native.data());
+        if (variance_reader) {
+            const std::vector<std::string>& names = reader.channel_names(i);
+            std::vector<int> variance_channels;
+            for (const std::string& name : variance_reader->selected_channel_names()) {
+                const auto found = std::find(names.begin(), names.end(), name);
+                if (found == names.end()) // both readers opened the same file
+                    throw Error(ErrorKind::Internal, "no channel " + name + " in the layer reader's rows",
+                                input.files[i], frame);
+                variance_channels.push_back(static_cast<int>(found - names.begin()));
+            }
+            reader.channels_from_native(i, native.data(), pixels, variance_channels, variance.data());
+        }
         refine::FrameRefineReport report = refine::refine_frame(
             scene::make_builtin_scene(job.scene, frame), frame, threshold, settings, layer.value.data(),
             layer.sigma.data(), variance_reader ? variance.data() : nullptr, weights.data(),
             context.progress());
         layer.store();
-        reader.read_native(i, 0, height, native);
         outputs.push_back(std::make_unique<io::FrameOutput>(
             output.files[i], reader, i, std::vector<std::string>{weight_channel}, attributes, job.exr_codec));
         outputs.back()->write_replaced_rows(0, height, native, layer.rows.data(), weights.data());

@@ -372,10 +372,9 @@ void SequenceReader::channels_from_native(int frame_index, const unsigned char* 
 {
     const detail::OpenFrame& frame = *m_frames.at(frame_index);
     for (std::size_t k = 0; k < channels.size(); ++k)
-        for (std::size_t p = 0; p < pixels; ++p)
-            OIIO::convert_pixel_values(frame.spec.channelformat(channels[k]),
-                                       native + p * frame.native_pixel_bytes + frame.byte_offset[channels[k]],
-                                       OIIO::TypeFloat, destination + p * channels.size() + k);
+        native_channel_to_floats(frame.spec.channelformat(channels[k]),
+                                 native + frame.byte_offset[channels[k]], frame.native_pixel_bytes, pixels,
+                                 destination + k, channels.size());
 }
 
 void SequenceReader::channels_to_native(int frame_index, unsigned char* native, std::size_t pixels,
