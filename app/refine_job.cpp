@@ -22,7 +22,6 @@
 
 #include <fmt/format.h>
 
-#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -169,7 +168,7 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
     double seconds_scoring = 0;
     refine::RefineSettings settings = job.settings;
     // Gain: the input's variance of the mean. This reader checks that every frame has it and
-    // names its channels; the values come from the layer reader's native rows.
+    // says which channels hold it; the values come from the layer reader's native rows.
     std::unique_ptr<io::SequenceReader> variance_reader;
     float threshold = static_cast<float>(job.threshold);
     if (job.selection == RefineSelection::Budget) {
@@ -211,18 +210,9 @@ RefineResult refine(const RefineJob& job, const CommonOptions& context_options)
         // output copies its other channels from.
         reader.read_native(i, 0, height, native);
         layer.from_native(reader, i, native.data());
-        if (variance_reader) {
-            const std::vector<std::string>& names = reader.channel_names(i);
-            std::vector<int> variance_channels;
-            for (const std::string& name : variance_reader->selected_channel_names()) {
-                const auto found = std::find(names.begin(), names.end(), name);
-                if (found == names.end()) // both readers opened the same file
-                    throw Error(ErrorKind::Internal, "no channel " + name + " in the layer reader's rows",
-                                input.files[i], frame);
-                variance_channels.push_back(static_cast<int>(found - names.begin()));
-            }
-            reader.channels_from_native(i, native.data(), pixels, variance_channels, variance.data());
-        }
+        if (variance_reader)
+            reader.channels_from_native(i, native.data(), pixels, variance_reader->selected_channels(i),
+                                        variance.data());
         refine::FrameRefineReport report = refine::refine_frame(
             scene::make_builtin_scene(job.scene, frame), frame, threshold, settings, layer.value.data(),
             layer.sigma.data(), variance_reader ? variance.data() : nullptr, weights.data(),

@@ -367,6 +367,11 @@ const std::vector<std::string>& SequenceReader::channel_names(int frame_index) c
     return m_frames.at(frame_index)->spec.channelnames;
 }
 
+const std::vector<int>& SequenceReader::selected_channels(int frame_index) const
+{
+    return m_frames.at(frame_index)->selected;
+}
+
 void SequenceReader::channels_from_native(int frame_index, const unsigned char* native, std::size_t pixels,
                                           const std::vector<int>& channels, float* destination) const
 {

@@ -79,6 +79,10 @@ public:
 
     /// Every channel name of frame `frame_index`, in native row order.
     const std::vector<std::string>& channel_names(int frame_index) const;
+    /// The selected channels of frame `frame_index` as indices into channel_names, in
+    /// read_selected's order. Another reader of the same files has the same names and
+    /// indices, so these also pick the selection out of that reader's native rows.
+    const std::vector<int>& selected_channels(int frame_index) const;
     /// Converts channels `channels` (indices into channel_names) of `pixels`
     /// pixels of native rows to float, interleaved in that order.
     void channels_from_native(int frame_index, const unsigned char* native, std::size_t pixels,
