@@ -302,6 +302,7 @@ std::string statistics_bytes(const ShotFingerprint& fingerprint, const denoise::
     header["rows"] = {statistics.row_begin, statistics.row_end};
     header["block_rows"] = denoise::kStageBlockRows;
     header["outliers"] = outliers_json(statistics.outliers);
+    header["roughness"] = statistics.roughness; // [block][frame]; JSON doubles round-trip exactly
     nlohmann::ordered_json blocks = nlohmann::ordered_json::array();
     Payload payload;
     for (const lowrank::GramAccumulator& block : statistics.blocks) {
@@ -325,6 +326,7 @@ denoise::Statistics read_statistics(const std::vector<StageBytes>& inputs, const
             return header.at("frames").get<int>() == frames &&
                    header.at("block_rows").get<int>() == denoise::kStageBlockRows &&
                    static_cast<int>(header.at("blocks").size()) == blocks &&
+                   header.at("roughness").size() == static_cast<size_t>(blocks) * frames &&
                    header.at("doubles").get<std::size_t>() == blocks * gram_doubles(frames);
         });
     denoise::Statistics shot;
@@ -338,6 +340,8 @@ denoise::Statistics read_statistics(const std::vector<StageBytes>& inputs, const
                 payload.gram(frames, block.at("rows").get<std::int64_t>(), block.at("tiles").get<std::int64_t>()));
         shot.outliers.non_finite += file.header.at("outliers").at("non_finite").get<std::int64_t>();
         shot.outliers.fireflies += file.header.at("outliers").at("fireflies").get<std::int64_t>();
+        for (const nlohmann::json& value : file.header.at("roughness"))
+            shot.roughness.push_back(value.get<double>());
     }
     return shot;
 }
@@ -348,6 +352,7 @@ std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::Solve
     nlohmann::ordered_json header = header_for(denoise::Stage::Solve, fingerprint, solved.gram.frames());
     header["gram"] = {{"rows", state.rows}, {"tiles", state.tiles}};
     header["outliers"] = outliers_json(solved.outliers);
+    header["frame_noise_factors"] = solved.frame_noise_factors;
     Payload payload;
     payload.add_gram(solved.gram);
     return stage_bytes(header, payload);
@@ -367,6 +372,9 @@ denoise::SolvedSums read_solve(const StageBytes& solve, const ShotFingerprint& f
                                    file.header.at("gram").at("tiles").get<std::int64_t>());
         solved.outliers.non_finite = file.header.at("outliers").at("non_finite").get<std::int64_t>();
         solved.outliers.fireflies = file.header.at("outliers").at("fireflies").get<std::int64_t>();
+        solved.frame_noise_factors = file.header.at("frame_noise_factors").get<std::vector<double>>();
+        if (solved.frame_noise_factors.size() != static_cast<size_t>(frames))
+            throw bad_input(path, "damaged solve file: its sizes do not agree");
         return solved;
     } catch (const nlohmann::json::exception& error) {
         throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));

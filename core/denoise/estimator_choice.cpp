@@ -559,7 +559,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             bool rejected = chosen != 0; // the rebuild: by a candidate's gain, or by the one-sided test
             if (chosen == 0 && below_test) {
                 const int near = clipped_window(width, height, x, y, 1);
-                const double scale = scale_row[x];
+                const double scale = scale_row[x] * frame.noise_factor;
                 const double excess = below_row[x] + kBelowMean * scale;
                 rejected = excess < 0 && excess * excess * near > below_limit * scale * scale;
                 if (rejected)

@@ -31,10 +31,12 @@
 // shadow that the rebuild fills with light seen in other frames). Render noise
 // has a bounded lower tail (values are not negative, fireflies are bright), so
 // where the 3×3 mean of min(input − rebuild, 0) lies below its mean under
-// Gaussian noise of the shot's pooled variance s² (−0.399·s) by more than z
-// (default 6) of its standard error (0.584·s/√9), the rebuild is not taken
-// there; the candidate with the least 3×3 SURE is. s² is sigma's noise level, a
-// mean of squares, so a heavy upper tail widens it: the test is conservative
+// Gaussian noise of scale s (−0.399·s) by more than z (default 6) of its
+// standard error (0.584·s/√9), the rebuild is not taken there; the candidate
+// with the least 3×3 SURE is. s is the root of sigma's noise level s², pooled
+// over every frame, times this frame's noise factor (frame_noise.h: a frame lit
+// by a point light alone is far cleaner than the shot's mean). s² is a mean of
+// squares, so a heavy upper tail widens it: the test is conservative
 // where the noise is heavy-tailed (on indirect light it changed 0.03 % of the
 // pixels of one benchmark shot and none of six others).
 // Non-local means of the input (non_local_means.h) keeps the hard edges a
@@ -105,6 +107,9 @@ struct ChoiceFrame {
     /// √s², s² pooled over the shot as for sigma (noise_scale_rows; the same for
     /// every frame). Null: no test of the input below the rebuild.
     const float* noise_scale = nullptr;
+    /// This frame's noise level over the shot's (frame_noise.h): the
+    /// one-sided test takes noise_scale times this.
+    double noise_factor = 1;
     double leverage = 0;
     int rebuilt_begin = 0, rebuilt_end = 0;
 };

@@ -2,6 +2,7 @@
 
 #include "core/common/error.h"
 #include "core/denoise/block_gram.h"
+#include "core/denoise/frame_noise.h"
 #include "core/denoise/stage_modes.h"
 #include "core/lowrank/confidence.h"
 #include "core/lowrank/projection.h"
@@ -113,6 +114,7 @@ TaskResult<SolvedSums> solve_task(const PassContext& context, const Statistics& 
     const auto start = Clock::now();
     result.output.gram = BlockGram::merge(shot.blocks, result.report.shape.frames);
     result.output.outliers = shot.outliers;
+    result.output.frame_noise_factors = frame_noise_factors(shot.roughness, result.report.shape.frames);
     const Solution solution = solution_from_gram(context.settings, result.output.gram);
     result.report.outliers = shot.outliers;
     result.report.rank_decision = solution.rank_decision;
@@ -289,6 +291,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             frame.rebuilt = output.data(), frame.sigma = buffers.sigma.data();
             frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr;
             frame.noise_scale = noise_scale.data();
+            frame.noise_factor = solved.frame_noise_factors.at(static_cast<size_t>(t));
             frame.leverage = modes.leverages(t);
             frame.rebuilt_begin = 0, frame.rebuilt_end = shape.height;
             buffers.chosen.resize(static_cast<size_t>(samples)),

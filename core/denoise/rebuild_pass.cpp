@@ -154,6 +154,8 @@ void RebuildPass::add_rows(int row, int end)
 
     const int raw_begin = std::max(0, row - input_reach), raw_end = std::min(shape.height, end + input_reach);
     if (estimators.enabled()) {
+        if (m_noise_factors.empty()) // the first pass has read every row
+            m_noise_factors = m_stream.frame_noise_factors();
         m_noise_scale.resize(static_cast<size_t>(valid / shape.channels));
         noise_scale_rows(rebuilder.noise_variance().data(), valid / shape.channels, shape.channels,
                          m_noise_scale.data());
@@ -182,6 +184,7 @@ void RebuildPass::add_rows(int row, int end)
         choice_frame.rebuilt = frame_output, choice_frame.sigma = frame_sigma;
         choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;
         choice_frame.noise_scale = m_noise_scale.data();
+        choice_frame.noise_factor = m_noise_factors[static_cast<size_t>(frame)];
         choice_frame.leverage = modes.leverages(frame);
         choice_frame.rebuilt_begin = first, choice_frame.rebuilt_end = last;
         Chosen& chosen = m_chosen_of_worker.local();

@@ -1,6 +1,7 @@
 #include "core/denoise/shot_stream.h"
 
 #include "core/common/error.h"
+#include "core/denoise/frame_noise.h"
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
@@ -96,6 +97,7 @@ void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning clea
         m_cleaned_samples.empty()) { // no counted read marked them: clean in full
         lowrank::clean_outliers(band.view(m_shape.frames), m_outlier_options, nullptr);
     } else if (cleaning == Cleaning::Count) {
+        measure_roughness(band);
         std::uint8_t* marks =
             m_plan.in_memory || m_cleaned_samples.empty() ? nullptr : m_cleaned_samples.data() + first_sample;
         const lowrank::OutlierCounts found =
@@ -116,6 +118,30 @@ void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning clea
                     patch_rows.patches->push_back({t, first + i, cleaned});
             }
     }
+}
+
+void ShotStream::measure_roughness(const Band& band)
+{
+    if (m_row_roughness.empty())
+        m_row_roughness.assign(static_cast<size_t>(m_shape.height) * m_shape.frames, 0.0);
+    row_roughness(band.view(m_shape.frames).view(), m_shape.width, m_shape.channels,
+                  band.row_end - band.row_begin,
+                  m_row_roughness.data() + static_cast<std::int64_t>(band.row_begin) * m_shape.frames);
+}
+
+std::vector<double> ShotStream::roughness_blocks(int row_begin, int row_end) const
+{
+    if (m_row_roughness.empty())
+        throw internal_error("roughness_blocks: no first read yet");
+    const auto first = m_row_roughness.begin() + static_cast<std::int64_t>(row_begin) * m_shape.frames;
+    return denoise::roughness_blocks(
+        std::vector<double>(first, first + static_cast<std::int64_t>(row_end - row_begin) * m_shape.frames),
+        m_shape.frames, row_begin, row_end);
+}
+
+std::vector<double> ShotStream::frame_noise_factors() const
+{
+    return denoise::frame_noise_factors(roughness_blocks(0, m_shape.height), m_shape.frames);
 }
 
 void ShotStream::ensure_whole_shot()
@@ -147,6 +173,7 @@ void ShotStream::read_whole_frames(int frame_begin, int frame_end)
 
 void ShotStream::finish_whole_shot()
 {
+    measure_roughness(m_whole);
     const lowrank::OutlierCounts found =
         lowrank::clean_outliers(m_whole.view(m_shape.frames), m_outlier_options, nullptr);
     m_outliers.non_finite += found.non_finite;

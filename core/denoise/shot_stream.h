@@ -48,6 +48,12 @@ public:
     void count_pass() { ++m_passes; }
     /// What the cleaning of the first reads found.
     const lowrank::OutlierCounts& outliers() const { return m_outliers; }
+    /// The input's roughness (frame_noise.h) per block of rows [row_begin,
+    /// row_end) and frame, as the first reads of those rows found it (a farm
+    /// statistics task's share).
+    std::vector<double> roughness_blocks(int row_begin, int row_end) const;
+    /// Each frame's noise factor (frame_noise.h) once the first pass has read every row.
+    std::vector<double> frame_noise_factors() const;
     std::int64_t row_samples() const { return static_cast<std::int64_t>(m_shape.width) * m_shape.channels; }
 
     /// Visits the shot in bands in a fixed order: the kept shot when it is in
@@ -119,6 +125,8 @@ public:
 
 private:
     void begin_pass_progress();
+    /// Before the cleaning of a first read: the roughness of `band`'s rows.
+    void measure_roughness(const Band& band);
 
     FrameSource& m_source;
     const lowrank::OutlierOptions& m_outlier_options;
@@ -127,6 +135,7 @@ private:
     ShotShape m_shape;
     int m_passes = 0;
     lowrank::OutlierCounts m_outliers;
+    std::vector<double> m_row_roughness; // [row][frame], by the first read of each row
     Band m_whole; // the kept shot, when it fits in memory
     bool m_whole_read_ahead = false; // read and cleaned by read_whole_frames and finish_whole_shot
     // Streaming: 1 for each sample whose row (over frames) the outlier cleaning changed.

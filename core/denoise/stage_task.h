@@ -1,9 +1,11 @@
 // One farm task's share of a denoise (issue 11; README, "Farm jobs and MPI"):
 // the engine's run split at the points where everything it carries is small.
 //   Statistics: pass 1 over a range of rows → the Gram sums of each fixed block
-//               of kStageBlockRows rows in it, and the outlier counts;
+//               of kStageBlockRows rows in it, the input's roughness per block
+//               and frame, and the outlier counts;
 //   Solve:      every block's sums, merged in block order (the order one run
-//               merges them in, so the bits are the same) → the temporal modes;
+//               merges them in, so the bits are the same) → the temporal modes
+//               and each frame's noise factor;
 //   Survey:     the modes → the mode filter's SURE sums of each image row of a
 //               range of rows (one run adds the same rows up in the same order,
 //               so every task after it chooses the same filters and N);
@@ -23,7 +25,6 @@
 #include "core/lowrank/outliers.h"
 
 #include <cstdint>
-#include <vector>
 #include <vector>
 
 namespace modestack::denoise {
@@ -80,12 +81,14 @@ struct Statistics {
     int row_end = 0;
     std::vector<lowrank::GramAccumulator> blocks;
     lowrank::OutlierCounts outliers;
+    std::vector<double> roughness; ///< the input's per block and frame (frame_noise.h)
 };
 
 /// The solve task's result: every block merged in row order, and the shot's outlier counts.
 struct SolvedSums {
     lowrank::GramAccumulator gram{1};
     lowrank::OutlierCounts outliers;
+    std::vector<double> frame_noise_factors; ///< per frame (frame_noise.h)
 };
 
 /// A survey task's result: the mode filter's survey sums of image rows

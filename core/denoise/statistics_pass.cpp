@@ -151,7 +151,8 @@ Statistics block_statistics(const PassContext& context, ShotStream& stream, int 
     }
     context.progress.end();
     gram.finish();
-    return {row_begin, row_end, std::move(gram.blocks()), stream.outliers()};
+    return {row_begin, row_end, std::move(gram.blocks()), stream.outliers(),
+            stream.roughness_blocks(row_begin, row_end)};
 }
 
 void describe_solution(const Settings& settings, const ShotShape& shape, const Solution& solution,

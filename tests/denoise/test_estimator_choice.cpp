@@ -272,18 +272,22 @@ TEST_CASE("estimators: with --non-negative no chosen value is negative, though t
 namespace {
 
 // One frame for choose_estimators itself: a lit wall (0.5) with Gaussian noise
-// of standard deviation `noise`, whose rebuild is the noise-free wall.
+// of standard deviation `noise`, whose rebuild is the noise-free wall; the
+// shot's pooled noise is `shot_noise` (by default the frame's), and
+// noise_factor says how this frame's compares (frame_noise.h).
 // Returns the frame's planes; the caller changes them.
 struct WallFrame {
     int width = 64, height = 48, channels = 3;
     std::vector<float> input, rebuilt, sigma, noise_scale;
-    WallFrame(float noise, unsigned seed)
+    double noise_factor = 1;
+    WallFrame(float noise, unsigned seed, float shot_noise = 0)
     {
         const size_t samples = static_cast<size_t>(width) * height * channels;
         std::mt19937 generator(seed);
         std::normal_distribution<float> normal(0.0f, noise);
         rebuilt.assign(samples, 0.5f), sigma.assign(samples, 0.2f * noise);
-        std::vector<float> noise_variance(samples, noise * noise);
+        const float pooled = shot_noise > 0 ? shot_noise : noise;
+        std::vector<float> noise_variance(samples, pooled * pooled);
         noise_scale.resize(samples / channels);
         noise_scale_rows(noise_variance.data(), samples / channels, channels, noise_scale.data());
         input.resize(samples);
@@ -301,6 +305,7 @@ struct WallFrame {
         frame.input = input.data(), frame.input_begin = 0, frame.input_end = height;
         frame.rebuilt = rebuilt.data(), frame.sigma = sigma.data(), frame.leverage = 0.05;
         frame.noise_scale = with_noise_scale ? noise_scale.data() : nullptr;
+        frame.noise_factor = noise_factor;
         frame.rebuilt_begin = 0, frame.rebuilt_end = height;
         std::vector<float> chosen_values(input.size()), chosen_sigma(input.size());
         std::vector<std::uint8_t> chosen(static_cast<size_t>(width) * height);
@@ -399,5 +404,37 @@ TEST_CASE("estimators: on pure noise around an unbiased rebuild the one-sided te
         CAPTURE(seed);
         WallFrame wall(0.05f, seed);
         CHECK(wall.choose(true) == wall.choose(false));
+    }
+}
+
+TEST_CASE("estimators: in a frame far cleaner than the shot, the one-sided test uses the frame's noise")
+{
+    // The frame's noise is 0.02, the shot's pooled noise 0.2 (its other frames
+    // lit by a noisier light). A 1 × 3 sliver of shadow 0.4 below the rebuild:
+    // too shallow for noise of 0.2, far too deep for noise of 0.02.
+    WallFrame wall(0.02f, 5, 0.2f);
+    const int sliver_x = 30;
+    for (int y = 10; y < 13; ++y)
+        for (int c = 0; c < 3; ++c)
+            wall.input[wall.at(sliver_x, y, c)] = 0.1f;
+    auto taken = [&](const std::vector<std::uint8_t>& chosen, int y) {
+        return static_cast<Estimator>(chosen[static_cast<size_t>(y) * wall.width + sliver_x]);
+    };
+    const std::vector<std::uint8_t> shot_scale = wall.choose(true);
+    wall.noise_factor = 0.1; // the frame's level over the shot's
+    std::vector<float> values;
+    const std::vector<std::uint8_t> frame_scale = wall.choose(true, &values);
+    for (int y = 10; y < 13; ++y) {
+        CAPTURE(y);
+        CHECK(taken(shot_scale, y) == Estimator::Rebuild);
+        CHECK(taken(frame_scale, y) != Estimator::Rebuild);
+        CHECK(values[wall.at(sliver_x, y)] < 0.3f);
+    }
+    // Where the frame is only noise around the rebuild, the frame's scale fires nowhere.
+    for (unsigned seed = 1; seed <= 4; ++seed) {
+        CAPTURE(seed);
+        WallFrame clean(0.02f, seed, 0.2f);
+        clean.noise_factor = 0.1;
+        CHECK(clean.choose(true) == clean.choose(false));
     }
 }
