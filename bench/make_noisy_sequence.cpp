@@ -23,6 +23,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <algorithm>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -143,9 +144,10 @@ void write_frame(const Settings& settings, int t)
     auto output = OIIO::ImageOutput::create(path);
     if (!output || !output->open(path, spec) || !output->write_image(OIIO::TypeHalf, pixels.data()) ||
         !output->close()) {
-        std::fprintf(stderr, "bench_make_noisy_sequence: cannot write %s: %s\n", path,
-                     output ? output->geterror().c_str() : OIIO::geterror().c_str());
-        std::exit(1);
+        // Thrown, not exit(): exit() from a worker ran the static destructors
+        // under the other workers, which crashed. parallel_for hands it to main.
+        throw std::runtime_error(std::string("cannot write ") + path + ": " +
+                                 (output ? output->geterror() : OIIO::geterror()));
     }
 }
 
@@ -154,7 +156,12 @@ void write_frame(const Settings& settings, int t)
 int main(int argc, char** argv)
 {
     Settings settings = parse(argc, argv);
-    tbb::parallel_for(0, settings.frames, [&](int t) { write_frame(settings, t); });
+    try {
+        tbb::parallel_for(0, settings.frames, [&](int t) { write_frame(settings, t); });
+    } catch (const std::exception& error) {
+        std::fprintf(stderr, "bench_make_noisy_sequence: %s\n", error.what());
+        return 1;
+    }
     std::printf("wrote %d frames of %dx%d RGB half ZIP: %s\n", settings.frames, settings.width, settings.height,
                 settings.output.c_str());
     return 0;
