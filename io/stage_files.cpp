@@ -15,7 +15,24 @@ namespace {
 
 static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "stage files hold little-endian doubles");
 
-constexpr const char* kMagic = "modestack stage file 1";
+// The first line of every stage file. Its number changes with the layout: 2 added
+// the input's roughness (statistics) and each frame's noise factor (solve).
+constexpr const char* kMagic = "modestack stage file 2";
+constexpr const char* kMagicPrefix = "modestack stage file ";
+
+// Throws a one-line error unless `line` is this version's first line.
+void check_magic(const std::string& path, const std::string& line)
+{
+    if (line == kMagic)
+        return;
+    if (line.rfind(kMagicPrefix, 0) == 0)
+        throw bad_input(path,
+                        fmt::format("was written by another modestack (stage file {}, this one reads {}): "
+                                    "run every task of a job with the same modestack",
+                                    line.substr(std::string(kMagicPrefix).size()),
+                                    std::string(kMagic).substr(std::string(kMagicPrefix).size())));
+    throw bad_input(path, "not a modestack stage file");
+}
 
 // The numbers of a file, appended in order.
 class Payload {
@@ -167,8 +184,9 @@ StageFile parse_stage_file(const std::string& path, std::string bytes, denoise::
 {
     StageFile file{path, std::move(bytes), {}, 0};
     const std::size_t magic_end = file.bytes.find('\n');
-    if (magic_end == std::string::npos || file.bytes.compare(0, magic_end, kMagic) != 0)
+    if (magic_end == std::string::npos)
         throw bad_input(path, "not a modestack stage file");
+    check_magic(path, file.bytes.substr(0, magic_end));
     const std::size_t header_end = file.bytes.find('\n', magic_end + 1);
     if (header_end == std::string::npos)
         throw bad_input(path, "damaged stage file: its header is cut off");
@@ -280,7 +298,10 @@ std::string shot_frames_of_solve_file(const StageBytes& solve)
     const std::string& path = solve.name;
     std::istringstream in(solve.bytes);
     std::string magic, header;
-    if (!std::getline(in, magic) || magic != kMagic || !std::getline(in, header))
+    if (!std::getline(in, magic))
+        throw bad_input(path, "not a modestack stage file");
+    check_magic(path, magic);
+    if (!std::getline(in, header))
         throw bad_input(path, "not a modestack stage file");
     try {
         const nlohmann::json json = nlohmann::json::parse(header);

@@ -174,6 +174,7 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
     run_ok("denoise " + dir.file("in.####.exr") + " --frames 1-11 --layer DiffInd -q --stage stats --rows 2/2 -o " +
            dir.file("short.stats"));
     std::ofstream(dir.file("junk.stats")) << "not a stage file\n";
+    std::ofstream(dir.file("old.stats")) << "modestack stage file 1\n{}\n";
     const std::string solve = in + "--stage solve -o " + dir.file("out/shot.solve") + " --stats ";
     struct Case {
         std::string arguments;
@@ -193,6 +194,8 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
          "rank3.stats: was made with other options: --rank"},
         {solve + dir.file("a1.stats") + " " + dir.file("junk.stats"), 1,
          "junk.stats: not a modestack stage file"},
+        {solve + dir.file("a1.stats") + " " + dir.file("old.stats"), 1,
+         "old.stats: was written by another modestack (stage file 1, this one reads 2)"},
         {solve + dir.file("a1.stats") + " " + dir.file("missing.stats"), 1, "missing.stats: cannot open"},
         {in + "--stage write --solve " + dir.file("a1.stats") + " --survey " + dir.file("shot.survey") +
              " --modes " + dir.file("m1.modes") + " -o " + dir.file("out/d.####.exr"),
