@@ -131,6 +131,12 @@ nlohmann::ordered_json denoise_json(const DenoiseResult& result)
             if (!layer.whiten.is_null())
                 entry["whiten"] = layer.whiten;
         }
+        // Each frame's noise level over the shot's, which scales the estimator
+        // choice's one-sided test (core/denoise/frame_noise.h); a layer's own
+        // when the layers have their own modes.
+        const denoise::Report& own = !result.joint && i < report.layers.size() ? report.layers[i] : report;
+        if (!own.frame_noise_factors.empty())
+            entry["frame_noise_factors"] = own.frame_noise_factors;
         layers.push_back(entry);
     }
     json["layers"] = layers;

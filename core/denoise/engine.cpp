@@ -83,6 +83,7 @@ Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& setting
     report.non_negative = rebuilt.non_negative;
     report.rank_map = rebuilt.rank_map;
     report.estimator_choice = rebuilt.estimator_choice;
+    report.frame_noise_factors = rebuilt.frame_noise_factors;
     report.passes = stream.passes();
     report.seconds_rebuild = seconds_since(start);
     return report;

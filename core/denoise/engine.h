@@ -117,6 +117,8 @@ struct Report {
     WeightSmoothingPlan weight_smoothing; ///< what --weight-smoothing did per kept mode
     /// --estimators: per frame, what each estimator won (empty: no choice made).
     std::vector<ChoiceCounts> estimator_choice;
+    /// --estimators: per frame, its noise level over the shot's (frame_noise.h; empty: no choice made).
+    std::vector<double> frame_noise_factors;
     double seconds_filter_survey = 0;     ///< the mode filter's SURE pass
     double seconds_statistics = 0;        ///< pass 1 (read + clean + Gram)
     double seconds_solve = 0;             ///< eigensolve or randomized SVD, and the rank rule

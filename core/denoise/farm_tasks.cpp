@@ -244,6 +244,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     std::vector<float> noise_scale; // the same for every frame: made once
     if (estimators.enabled()) {
         report.estimator_choice.assign(static_cast<size_t>(shape.frames), {});
+        report.frame_noise_factors = solved.frame_noise_factors;
         noise_scale.resize(static_cast<size_t>(samples / shape.channels));
         noise_scale_rows(shot.noise_variance.data(), samples / shape.channels, shape.channels,
                          noise_scale.data());

@@ -193,6 +193,7 @@ std::vector<Report> run_layers(FrameSource& source, FrameSink& sink, const Setti
         layer.report.non_negative = rebuilt.non_negative;
         layer.report.rank_map = rebuilt.rank_map;
         layer.report.estimator_choice = rebuilt.estimator_choice;
+        layer.report.frame_noise_factors = rebuilt.frame_noise_factors;
         layer.report.passes = layer.stream->passes();
         layer.report.seconds_statistics = statistics_seconds;
         layer.report.seconds_filter_survey = survey_seconds;

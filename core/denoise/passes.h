@@ -156,6 +156,7 @@ struct RebuildReport {
     NonNegativeCounts non_negative;
     RankMapSummary rank_map;
     std::vector<ChoiceCounts> estimator_choice; ///< per frame (--estimators; empty: none)
+    std::vector<double> frame_noise_factors;    ///< per frame (--estimators; empty: none)
 };
 
 /// Pass 2 band by band: every frame rebuilt into the sink. Starts the sink (begin) on construction.

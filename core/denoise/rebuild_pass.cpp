@@ -210,6 +210,7 @@ RebuildReport RebuildPass::finish()
 {
     if (m_context.settings.rank_map.enabled)
         m_report.rank_map.finish();
+    m_report.frame_noise_factors = m_noise_factors;
     m_context.progress.end();
     return std::move(m_report);
 }

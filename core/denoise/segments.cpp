@@ -199,6 +199,8 @@ Report merge_reports(const std::vector<Report>& reports)
         merged.non_negative += part.non_negative;
         merged.estimator_choice.insert(merged.estimator_choice.end(), part.estimator_choice.begin(),
                                        part.estimator_choice.end());
+        merged.frame_noise_factors.insert(merged.frame_noise_factors.end(), part.frame_noise_factors.begin(),
+                                          part.frame_noise_factors.end()); // each over its own segment
         merged.seconds_filter_survey += part.seconds_filter_survey;
         merged.seconds_statistics += part.seconds_statistics;
         merged.seconds_solve += part.seconds_solve;

@@ -471,6 +471,15 @@ TEST_CASE("denoise --estimators: a shadow that sweeps comes out better than the 
         CHECK(frame["estimated_rms_error"]["rebuild"].get<double>() >= 0.0);
     }
     CHECK(estimators["frames"][0]["frame"] == 1);
+    // Each frame's noise level over the shot's, which the one-sided test uses: positive, mean 1.
+    const auto factors = load_json(dir.file("s.json"))["layers"][0]["frame_noise_factors"];
+    REQUIRE(factors.size() == kFrames);
+    double sum = 0;
+    for (const auto& factor : factors) {
+        CHECK(factor.get<double>() > 0.0);
+        sum += factor.get<double>();
+    }
+    CHECK(sum / kFrames == doctest::Approx(1.0));
 }
 
 TEST_CASE("denoise method options: bad values and combinations exit 2 with one line, nothing written")
