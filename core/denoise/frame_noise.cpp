@@ -28,12 +28,10 @@ void row_roughness(const lowrank::BandView& band, int width, int channels, int b
     });
 }
 
-std::vector<double> roughness_blocks(const std::vector<double>& row_sums, int frames, int row_begin,
-                                     int row_end)
+std::vector<double> roughness_blocks(const double* row_sums, int frames, int row_begin, int row_end)
 {
-    if (row_begin % kStageBlockRows != 0 ||
-        row_sums.size() != static_cast<size_t>(row_end - row_begin) * static_cast<size_t>(frames))
-        throw internal_error("roughness_blocks: rows do not start on a block or sums do not match them");
+    if (row_begin % kStageBlockRows != 0 || row_end < row_begin)
+        throw internal_error("roughness_blocks: rows do not start on a block");
     std::vector<double> blocks(static_cast<size_t>(stage_blocks(row_end - row_begin)) * frames, 0.0);
     for (int row = row_begin; row < row_end; ++row) {
         const size_t block = static_cast<size_t>((row - row_begin) / kStageBlockRows);

@@ -31,8 +31,7 @@ void row_roughness(const lowrank::BandView& band, int width, int channels, int b
 /// The per-frame sums of each block of kStageBlockRows image rows in rows
 /// [row_begin, row_end) (row_begin a block boundary), from their per-row sums
 /// (row_sums[(row − row_begin) * frames + t]): [block][frame].
-std::vector<double> roughness_blocks(const std::vector<double>& row_sums, int frames, int row_begin,
-                                     int row_end);
+std::vector<double> roughness_blocks(const double* row_sums, int frames, int row_begin, int row_end);
 
 /// Each frame's noise factor from every block's sums of the shot, in row order.
 std::vector<double> frame_noise_factors(const std::vector<double>& blocks, int frames);

@@ -190,7 +190,6 @@ private:
     tbb::enumerable_thread_specific<ScratchBuffer<float>> m_raw_of_worker; // one frame's input rows the
                                                                            // choice reads, unclean
     std::vector<float> m_noise_scale; // the choice's noise scale of the band's rebuilt rows
-    std::vector<double> m_noise_factors; // each frame's (frame_noise.h)
     std::vector<float> m_ranks;
 };
 

@@ -72,8 +72,10 @@ RebuildPass::RebuildPass(const PassContext& context, ShotStream& stream, const R
     context.progress.begin("rebuilding frames", stream.shape().height);
     if (settings.rank_map.enabled)
         m_report.rank_map.largest_rank = modes.rebuild_modes;
-    if (settings.estimators.enabled())
+    if (settings.estimators.enabled()) {
         m_report.estimator_choice.assign(static_cast<size_t>(stream.shape().frames), {});
+        m_report.frame_noise_factors = stream.frame_noise_factors(); // the first pass has read every row
+    }
 }
 
 void RebuildPass::add_rows(int row, int end)
@@ -154,8 +156,6 @@ void RebuildPass::add_rows(int row, int end)
 
     const int raw_begin = std::max(0, row - input_reach), raw_end = std::min(shape.height, end + input_reach);
     if (estimators.enabled()) {
-        if (m_noise_factors.empty()) // the first pass has read every row
-            m_noise_factors = m_stream.frame_noise_factors();
         m_noise_scale.resize(static_cast<size_t>(valid / shape.channels));
         noise_scale_rows(rebuilder.noise_variance().data(), valid / shape.channels, shape.channels,
                          m_noise_scale.data());
@@ -184,7 +184,7 @@ void RebuildPass::add_rows(int row, int end)
         choice_frame.rebuilt = frame_output, choice_frame.sigma = frame_sigma;
         choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;
         choice_frame.noise_scale = m_noise_scale.data();
-        choice_frame.noise_factor = m_noise_factors[static_cast<size_t>(frame)];
+        choice_frame.noise_factor = report.frame_noise_factors[static_cast<size_t>(frame)];
         choice_frame.leverage = modes.leverages(frame);
         choice_frame.rebuilt_begin = first, choice_frame.rebuilt_end = last;
         Chosen& chosen = m_chosen_of_worker.local();
@@ -210,7 +210,6 @@ RebuildReport RebuildPass::finish()
 {
     if (m_context.settings.rank_map.enabled)
         m_report.rank_map.finish();
-    m_report.frame_noise_factors = m_noise_factors;
     m_context.progress.end();
     return std::move(m_report);
 }

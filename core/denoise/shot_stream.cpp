@@ -133,10 +133,9 @@ std::vector<double> ShotStream::roughness_blocks(int row_begin, int row_end) con
 {
     if (m_row_roughness.empty())
         throw internal_error("roughness_blocks: no first read yet");
-    const auto first = m_row_roughness.begin() + static_cast<std::int64_t>(row_begin) * m_shape.frames;
-    return denoise::roughness_blocks(
-        std::vector<double>(first, first + static_cast<std::int64_t>(row_end - row_begin) * m_shape.frames),
-        m_shape.frames, row_begin, row_end);
+    return denoise::roughness_blocks(m_row_roughness.data() +
+                                         static_cast<std::int64_t>(row_begin) * m_shape.frames,
+                                     m_shape.frames, row_begin, row_end);
 }
 
 std::vector<double> ShotStream::frame_noise_factors() const

@@ -69,7 +69,7 @@ TEST_CASE("frame noise: on white noise the factors are the frames' noise levels 
     const std::vector<double> levels{0.05, 0.1, 0.2, 0.05, 0.1};
     const NoisyShot shot(96, 64, 3, levels, 7);
     const std::vector<double> factors =
-        frame_noise_factors(roughness_blocks(shot.row_sums(0, 64), shot.frames, 0, 64), shot.frames);
+        frame_noise_factors(roughness_blocks(shot.row_sums(0, 64).data(), shot.frames, 0, 64), shot.frames);
     REQUIRE(factors.size() == levels.size());
     const double mean = (0.05 + 0.1 + 0.2 + 0.05 + 0.1) / 5;
     for (size_t t = 0; t < levels.size(); ++t) {
@@ -82,19 +82,19 @@ TEST_CASE("frame noise: a shot without noise has factor 1 in every frame")
 {
     const NoisyShot shot(16, 8, 1, {0.0, 0.0, 0.0}, 1);
     const std::vector<double> factors =
-        frame_noise_factors(roughness_blocks(shot.row_sums(0, 8), shot.frames, 0, 8), shot.frames);
+        frame_noise_factors(roughness_blocks(shot.row_sums(0, 8).data(), shot.frames, 0, 8), shot.frames);
     CHECK(factors == std::vector<double>{1.0, 1.0, 1.0});
 }
 
 TEST_CASE("frame noise: statistics tasks' blocks give the bits of the whole run's")
 {
     const NoisyShot shot(40, 150, 3, {0.1, 0.3, 0.2, 0.05}, 3);
-    const std::vector<double> whole = roughness_blocks(shot.row_sums(0, 150), shot.frames, 0, 150);
-    std::vector<double> joined = roughness_blocks(shot.row_sums(0, 64), shot.frames, 0, 64);
-    const std::vector<double> rest = roughness_blocks(shot.row_sums(64, 150), shot.frames, 64, 150);
+    const std::vector<double> whole = roughness_blocks(shot.row_sums(0, 150).data(), shot.frames, 0, 150);
+    std::vector<double> joined = roughness_blocks(shot.row_sums(0, 64).data(), shot.frames, 0, 64);
+    const std::vector<double> rest = roughness_blocks(shot.row_sums(64, 150).data(), shot.frames, 64, 150);
     joined.insert(joined.end(), rest.begin(), rest.end());
     CHECK(joined == whole); // exact: the same sums in the same order
     CHECK(whole.size() == static_cast<size_t>(stage_blocks(150)) * shot.frames);
-    CHECK_THROWS_AS(roughness_blocks(shot.row_sums(10, 64), shot.frames, 10, 64), Error);
+    CHECK_THROWS_AS(roughness_blocks(shot.row_sums(10, 64).data(), shot.frames, 10, 64), Error);
     CHECK_THROWS_AS(frame_noise_factors({1.0, 2.0, 3.0}, 2), Error);
 }
