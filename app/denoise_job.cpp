@@ -424,9 +424,6 @@ DenoiseResult denoise_in_arena(const DenoiseJob& job, const CommonOptions& conte
                 throw usage_error(missing_guide(kind, renderer, source, input.files.front()));
         guides.frames = settings.feature_guide.frames;
     }
-    const std::int64_t max_memory_bytes = settings.max_memory_bytes;
-    settings.max_memory_bytes = engine_memory_budget(settings.max_memory_bytes, reader, frames_written,
-                                                     reader.selected_channel_count(), guides);
     SequenceSink sink(reader, paths, job.save_modes);
     sink.write_rank_map_to(job.rank_map);
     sink.set_part_layout(job.part_layout);
@@ -438,6 +435,9 @@ DenoiseResult denoise_in_arena(const DenoiseJob& job, const CommonOptions& conte
             io::HeaderAttribute::of_text("modestack:beauty", beauty_formula(beauty.targets.front())));
         sink.update_beauty(std::make_unique<BeautyUpdate>(reader, beauty));
     }
+    const std::int64_t max_memory_bytes = settings.max_memory_bytes;
+    settings.max_memory_bytes =
+        engine_memory_budget(settings.max_memory_bytes, reader, sink.open_output_bytes(), guides);
     append_color_attributes(attributes, color);
     if (job.transform.kind != denoise::TransformKind::None)
         attributes.push_back(

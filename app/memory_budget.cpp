@@ -38,37 +38,20 @@ std::int64_t resident_bytes()
     return resident * sysconf(_SC_PAGE_SIZE);
 }
 
-// OpenEXR's buffers for one open file, without its worker threads: three chunks
-// of scanlines, its line buffer and the codec's two (heaptrack of a 1080p run:
-// allocated at open, resident once the file is read or written).
-std::int64_t open_file_bytes(int width, std::size_t pixel_bytes, int chunk_rows)
-{
-    constexpr int kChunkBuffers = 3;
-    return kChunkBuffers * static_cast<std::int64_t>(width) * static_cast<std::int64_t>(pixel_bytes) * chunk_rows;
-}
-
 }  // namespace
 
-std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::SequenceReader& reader, int outputs,
-                                  int extra_channels, const GuideFiles& guides)
+std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::SequenceReader& reader,
+                                  std::int64_t output_bytes, const GuideFiles& guides)
 {
-    std::int64_t files = 0;
-    for (int frame = 0; frame < reader.frame_count(); ++frame) {
-        const std::size_t pixel = reader.native_pixel_bytes(frame);
-        const int rows = reader.chunk_rows(frame);
-        files += open_file_bytes(reader.width(), pixel, rows);
-        if (frame < outputs)  // outputs add sigma channels in the first selected channel's type
-            files += open_file_bytes(
-                reader.width(), pixel + reader.selected_value_bytes(frame) * static_cast<std::size_t>(extra_channels),
-                rows);
-    }
-    int open_files = reader.frame_count() + outputs;
+    std::int64_t files = output_bytes;
+    int open_files = reader.frame_count();
+    for (int frame = 0; frame < reader.frame_count(); ++frame)
+        files += reader.decoder_buffer_bytes(frame);
     for (const io::SequenceReader* guide : guides.readers) {
         // The guide reads a few frames spread over the shot: count the largest files.
         std::vector<std::int64_t> sizes;
         for (int frame = 0; frame < guide->frame_count(); ++frame)
-            sizes.push_back(
-                open_file_bytes(guide->width(), guide->native_pixel_bytes(frame), guide->chunk_rows(frame)));
+            sizes.push_back(guide->decoder_buffer_bytes(frame));
         const int read = std::min(guides.frames, guide->frame_count());
         std::partial_sort(sizes.begin(), sizes.begin() + read, sizes.end(), std::greater<>());
         for (int i = 0; i < read; ++i)
@@ -77,8 +60,8 @@ std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::Seque
     }
     const std::int64_t held = resident_bytes() + files;
     if (held >= max_memory_bytes)
-        throw usage_error(fmt::format("--max-memory {} MiB is too small: the program and its {} open files alone "
-                                      "hold about {} MiB",
+        throw usage_error(fmt::format("--max-memory {} MiB is too small: the program, its {} input files and "
+                                      "the outputs' buffers alone hold about {} MiB",
                                       max_memory_bytes >> 20, open_files, (held >> 20) + 1));
     return max_memory_bytes - held;
 }

@@ -29,12 +29,13 @@ struct GuideFiles {
 /// The part of `max_memory_bytes` left for the denoise engine's plan, when the
 /// budget is the whole process's: minus what the process holds already (the
 /// program and its libraries, about 130 MiB with Debian's OpenImageIO, the
-/// opened inputs and guide layers) and what OpenEXR will hold per open file
-/// while reading and writing (three chunks of scanlines), for every input,
-/// `outputs` outputs with `extra_channels` more channels and the guide files
-/// read. Throws a usage error naming --max-memory when nothing is left.
-std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::SequenceReader& reader, int outputs,
-                                  int extra_channels, const GuideFiles& guides = {});
+/// opened inputs and guide layers), what the decoder will hold per input file
+/// once read (io::SequenceReader::decoder_buffer_bytes: nothing on libdeflate's
+/// path) for every input and the guide files read, and `output_bytes`, what the
+/// open outputs hold (SequenceSink::open_output_bytes). Throws a usage error
+/// naming --max-memory when nothing is left.
+std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::SequenceReader& reader,
+                                  std::int64_t output_bytes, const GuideFiles& guides = {});
 
 /// Tells the C library to keep freed blocks of up to 32 MiB (glibc's largest
 /// mmap threshold) in its heap for reuse instead of returning them to the kernel:

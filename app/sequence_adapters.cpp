@@ -160,6 +160,16 @@ void SequenceSink::set_output_format(io::OutputFormat format)
     m_format = std::move(format);
 }
 
+std::int64_t SequenceSink::open_output_bytes() const
+{
+    std::int64_t bytes = 0;
+    for (size_t frame = 0; frame < m_paths.size(); ++frame)
+        if (!m_paths[frame].empty())
+            bytes += io::copy_buffer_bytes(m_reader, static_cast<int>(frame), m_sigma_names,
+                                           m_reader.exr_codec(), m_part_layout, m_format);
+    return bytes;
+}
+
 void SequenceSink::begin(const denoise::RebuildStart& start)
 {
     std::vector<io::HeaderAttribute> attributes = m_attributes;

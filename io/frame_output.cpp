@@ -1,6 +1,7 @@
 #include "io/frame_output.h"
 
 #include "core/common/error.h"
+#include "io/detail/library_buffers.h"
 #include "io/detail/multipart_writer.h"
 #include "io/detail/open_frame.h"
 #include "io/detail/output_layout.h"
@@ -120,6 +121,15 @@ detail::OutputLayout layout_of(const detail::OpenFrame& source,
         layout.compressions.push_back(
             output_compression(format.compression, spec.get_string_attribute("compression")));
     return layout;
+}
+
+// Whether libdeflate writes the copy (zip_scanline_writer.h): a single-part ZIP or
+// ZIPS output with the libdeflate codec. Anything else goes through OpenEXR's
+// library (a multi-part copy) or OpenImageIO.
+bool written_with_libdeflate(const detail::OutputLayout& layout, ExrCodec codec, bool multipart_output)
+{
+    const std::string method = split_compression(layout.compressions.front()).method;
+    return !multipart_output && codec == ExrCodec::Libdeflate && (method == "zip" || method == "zips");
 }
 
 // The output channel that copies or replaces input channel `channel`, or -1.
@@ -261,15 +271,30 @@ FrameOutput::FrameOutput(const std::string& path, const SequenceReader& reader, 
             std::make_unique<detail::MultiPartWriter>(m_temporary_path, m_path, source, layout, attributes);
         return;
     }
-    // libdeflate writes ZIP and ZIPS only; any other compression asked for goes through OpenImageIO.
-    const std::string method = split_compression(layout.compressions.front()).method;
-    if (codec == ExrCodec::Libdeflate && (method == "zip" || method == "zips"))
+    if (written_with_libdeflate(layout, codec, multipart_output))
         m_state->zip_writer =
             detail::ZipScanlineWriter::open(m_temporary_path, m_path, source, layout, attributes);
     if (!m_state->zip_writer) {
         const OIIO::ImageSpec spec = m_state->spec;
         open(&spec);
     }
+}
+
+std::int64_t copy_buffer_bytes(const SequenceReader& reader, int frame_index,
+                               const std::vector<std::string>& extra_channels, ExrCodec codec,
+                               PartLayout parts, const OutputFormat& format)
+{
+    const detail::OpenFrame& source = reader.frame(frame_index);
+    const bool multipart_output = source.multipart() && parts == PartLayout::AsInput;
+    const detail::OutputLayout layout = layout_of(source, extra_channels, format, multipart_output);
+    // The writer takes single-part ZIP/ZIPS scanline inputs only (zip_scanline_writer.h):
+    // those the reader decodes with libdeflate. It holds the chunk being filled.
+    if (written_with_libdeflate(layout, codec, multipart_output) && !source.multipart() &&
+        source.parts.front().zip_layout)
+        return static_cast<std::int64_t>(layout.pixel_bytes) * reader.width() *
+               detail::zip_chunk_rows(split_compression(layout.compressions.front()).method == "zips");
+    return detail::openexr_file_buffer_bytes(reader.width(), layout.pixel_bytes,
+                                             reader.chunk_rows(frame_index));
 }
 
 FrameOutput::FrameOutput(const std::string& path, const NewImageDescription& image,

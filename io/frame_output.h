@@ -113,6 +113,14 @@ private:
     bool m_committed = false;
 };
 
+/// Bytes an output made by FrameOutput's copying constructor with these
+/// arguments holds while it is open: the chunk being filled when libdeflate
+/// writes it, else OpenEXR's three chunks of scanlines (in the input's chunk
+/// height). What --max-memory counts per output file.
+std::int64_t copy_buffer_bytes(const SequenceReader& reader, int frame_index,
+                               const std::vector<std::string>& extra_channels, ExrCodec codec,
+                               PartLayout parts = PartLayout::AsInput, const OutputFormat& format = {});
+
 /// Checks before any work: no output is also an input; each output directory
 /// exists (it is created if missing) and is writable. Throws Error otherwise.
 void check_outputs(const std::vector<std::string>& outputs, const std::vector<std::string>& inputs);

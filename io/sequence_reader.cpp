@@ -1,6 +1,7 @@
 #include "io/sequence_reader.h"
 
 #include "core/common/error.h"
+#include "io/detail/library_buffers.h"
 #include "io/detail/open_frame.h"
 #include "io/detail/open_image.h"
 #include "io/detail/zip_scanline_reader.h"
@@ -349,6 +350,17 @@ int SequenceReader::chunk_rows(int frame_index) const
     for (const detail::OpenPart& part : m_frames.at(frame_index)->parts)
         rows = std::max(rows, part_chunk_rows(part.spec));
     return rows;
+}
+
+std::int64_t SequenceReader::decoder_buffer_bytes(int frame_index) const
+{
+    const detail::OpenFrame& frame = *m_frames.at(frame_index);
+    const bool libdeflate =
+        std::all_of(frame.parts.begin(), frame.parts.end(),
+                    [](const detail::OpenPart& part) { return part.zip_layout != nullptr; });
+    return libdeflate ? 0
+                      : detail::openexr_file_buffer_bytes(m_width, frame.native_pixel_bytes,
+                                                          chunk_rows(frame_index));
 }
 
 std::size_t SequenceReader::native_pixel_bytes(int frame_index) const

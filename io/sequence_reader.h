@@ -15,6 +15,7 @@
 #include "io/layers.h"
 #include "io/sequence.h"
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -76,6 +77,10 @@ public:
     /// RLE and ZIPS, 16 for ZIP, 32 for PIZ, PXR24, B44 and DWAA, 256 for DWAB;
     /// the tile height of a tiled file): what an open file buffers at a time.
     int chunk_rows(int frame_index) const;
+    /// Bytes the decoder holds for frame `frame_index`'s open file once its rows
+    /// are read, beyond what opening it took: none when libdeflate decodes every
+    /// part (its buffers are per thread), else OpenEXR's three chunks of scanlines.
+    std::int64_t decoder_buffer_bytes(int frame_index) const;
 
     /// Every channel name of frame `frame_index`, in native row order.
     const std::vector<std::string>& channel_names(int frame_index) const;

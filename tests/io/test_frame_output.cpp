@@ -225,3 +225,38 @@ TEST_CASE("check_outputs refuses an output equal to an input and an output direc
     io::check_outputs({dir.file("new/dir/out.0001.exr")}, {dir.file("in.0001.exr")});
     CHECK(std::filesystem::is_directory(dir.file("new/dir")));
 }
+
+TEST_CASE(
+    "buffer bytes: libdeflate's paths hold no decode buffer per input and one chunk per output, OpenEXR's "
+    "three chunks")
+{
+    TempDir dir;
+    testkit::ExrLayout layout = multilayer(); // 18 bytes a pixel, 24 with 3 half sigma channels
+    const std::vector<std::string> sigma{"diffuse_indirect.sigma.R", "diffuse_indirect.sigma.G",
+                                         "diffuse_indirect.sigma.B"};
+    testkit::write_sequence(dir.file("zip.%04d.exr"), {1}, layout, noise_value);
+    layout.compression = "piz";
+    testkit::write_sequence(dir.file("piz.%04d.exr"), {1}, layout, noise_value);
+
+    io::SequenceReader zip(io::find_input_sequence(dir.file("zip.####.exr")), {"diffuse_indirect"});
+    CHECK(zip.decoder_buffer_bytes(0) == 0);
+    CHECK(io::copy_buffer_bytes(zip, 0, sigma, io::ExrCodec::Libdeflate) == 24 * 19 * 16);
+    io::OutputFormat zips;
+    zips.compression = "zips";
+    CHECK(io::copy_buffer_bytes(zip, 0, sigma, io::ExrCodec::Libdeflate, io::PartLayout::AsInput, zips) ==
+          24 * 19 * 1);
+    // Through OpenImageIO, OpenEXR's library holds three chunks of the input's height.
+    io::SequenceReader zip_by_oiio(io::find_input_sequence(dir.file("zip.####.exr")), {"diffuse_indirect"},
+                                   io::ExrCodec::OpenImageIO);
+    CHECK(zip_by_oiio.decoder_buffer_bytes(0) == 3 * 18 * 19 * 16);
+    CHECK(io::copy_buffer_bytes(zip_by_oiio, 0, sigma, io::ExrCodec::OpenImageIO) == 3 * 24 * 19 * 16);
+
+    io::SequenceReader piz(io::find_input_sequence(dir.file("piz.####.exr")), {"diffuse_indirect"});
+    CHECK(piz.decoder_buffer_bytes(0) == 3 * 18 * 19 * 32);
+    CHECK(io::copy_buffer_bytes(piz, 0, sigma, io::ExrCodec::Libdeflate) == 3 * 24 * 19 * 32);
+    // A PIZ input written as ZIP goes through OpenImageIO too (the libdeflate writer copies ZIP inputs).
+    io::OutputFormat as_zip;
+    as_zip.compression = "zip";
+    CHECK(io::copy_buffer_bytes(piz, 0, sigma, io::ExrCodec::Libdeflate, io::PartLayout::AsInput, as_zip) ==
+          3 * 24 * 19 * 32);
+}
