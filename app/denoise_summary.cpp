@@ -151,6 +151,7 @@ nlohmann::ordered_json denoise_json(const DenoiseResult& result)
     json["passes"] = report.passes;
     json["in_memory"] = report.plan.in_memory;
     json["band_rows"] = report.plan.band_rows;
+    json["halo_band_rows"] = report.plan.halo_band_rows;
     add_modes_json(report, json);
     json["mode_filter"] = mode_filter_json(report);
     if (report.rank_map.largest_rank > 0)

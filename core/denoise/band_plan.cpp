@@ -83,6 +83,7 @@ BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, const
         plan.band_rows = largest_band(std::min(kMaxKeptBandRows, shape.height),
                                       [&](int rows) { return kept_bytes(rows) <= max_memory_bytes; });
         plan.estimated_bytes = kept_bytes(plan.band_rows);
+        plan.halo_band_rows = plan.band_rows;
         return plan;
     }
     // Streaming: a read band with its halo and the source's rows, pass 2's
@@ -92,13 +93,30 @@ BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, const
         return marks + (input_row + shared_row + needs.source_row_bytes) * (rows + 2 * needs.halo_rows) +
                2 * shared_row * rows + pass_two_bytes(shape, needs, rows, false);
     };
-    if (streamed_bytes(smallest_band) > max_memory_bytes)
-        throw usage_error(fmt::format("--max-memory leaves {} MiB for the shot's data, too little for {} frames of "
-                                      "width {}: a band of {} rows needs {} MiB",
-                                      max_memory_bytes >> 20, shape.frames, shape.width, smallest_band,
-                                      mebibytes_rounded_up(streamed_bytes(smallest_band))));
-    plan.band_rows = largest_band(shape.height, [&](int rows) { return streamed_bytes(rows) <= max_memory_bytes; });
-    plan.estimated_bytes = streamed_bytes(plan.band_rows);
+    if (streamed_bytes(smallest_band) <= max_memory_bytes) {
+        plan.band_rows =
+            largest_band(shape.height, [&](int rows) { return streamed_bytes(rows) <= max_memory_bytes; });
+        plan.halo_band_rows = plan.band_rows;
+        plan.estimated_bytes = streamed_bytes(plan.band_rows);
+        return plan;
+    }
+    // Shorter bands for the passes with a halo. The statistics still read
+    // smallest_band rows, without a halo or pass 2's buffers.
+    int rows = smallest_band - 1;
+    while (rows > 1 && streamed_bytes(rows) > max_memory_bytes)
+        --rows;
+    const std::int64_t statistics_bytes = marks +
+                                          (input_row + shared_row + needs.source_row_bytes) * smallest_band +
+                                          2 * shared_row * smallest_band;
+    if (rows < 1 || streamed_bytes(rows) > max_memory_bytes || statistics_bytes > max_memory_bytes)
+        throw usage_error(fmt::format(
+            "--max-memory leaves {} MiB for the shot's data, too little for {} frames of "
+            "width {}: a band of {} rows needs {} MiB, of 1 row {} MiB",
+            max_memory_bytes >> 20, shape.frames, shape.width, smallest_band,
+            mebibytes_rounded_up(streamed_bytes(smallest_band)), mebibytes_rounded_up(streamed_bytes(1))));
+    plan.band_rows = smallest_band;
+    plan.halo_band_rows = rows;
+    plan.estimated_bytes = std::max(streamed_bytes(rows), statistics_bytes);
     return plan;
 }
 

@@ -5,7 +5,9 @@
 // width × frames × band height (plus one byte per sample of the image for the
 // outlier marks), never with height × frames. Band heights are multiples of
 // kChunkRows so that the Gram matrix is fed the same fixed row chunks either
-// way, which keeps results bit-identical.
+// way, which keeps results bit-identical. Where even a kChunkRows band with its
+// halo does not fit, the passes with a halo walk shorter bands (slower: each
+// re-reads its halo) while the statistics keep whole chunks.
 #pragma once
 
 #include "core/denoise/frame_stream.h"
@@ -52,6 +54,11 @@ struct PassNeeds {
 struct BandPlan {
     bool in_memory = false;  ///< whole shot kept after one read
     int band_rows = 0;       ///< rows per band of the later passes (and of every read when streaming)
+    /// Rows per band of the passes that read a halo around it (the mode filter's
+    /// survey and pass 2): band_rows, or fewer (down to 1) when even a kChunkRows
+    /// band with its halo does not fit. Their bits do not depend on the band
+    /// height; the Gram's chunks do, so the statistics keep band_rows.
+    int halo_band_rows = 0;
     int halo_rows = 0;       ///< extra rows read above and below a band in pass 2
     std::int64_t estimated_bytes = 0;  ///< working memory of the plan
     std::int64_t budget_bytes = 0;     ///< the budget it was made for

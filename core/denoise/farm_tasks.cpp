@@ -182,8 +182,8 @@ TaskResult<ModeImages> modes_task(const PassContext& context, const SolvedSums& 
         fmt::format("modes of rows {}-{}: reading {} frames", row_begin, row_end - 1, shape.frames),
         row_end - row_begin);
     Band band;
-    for (int row = row_begin; row < row_end; row += plan.bands.band_rows) {
-        const int end = std::min(row_end, row + plan.bands.band_rows);
+    for (int row = row_begin; row < row_end; row += plan.bands.halo_band_rows) {
+        const int end = std::min(row_end, row + plan.bands.halo_band_rows);
         stream.record_patches(row, end, row_begin, &images.patches);
         stream.read_task_band(band, row, end);
         stream.record_patches(0, 0, 0, nullptr);

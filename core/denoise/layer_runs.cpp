@@ -52,8 +52,8 @@ template <typename Step>
 void for_each_band_of_layers(size_t layers, const BandPlan& bands, int height, Progress& progress,
                              Step&& step)
 {
-    for (int row = 0; row < height; row += bands.band_rows) {
-        const int end = std::min(height, row + bands.band_rows);
+    for (int row = 0; row < height; row += bands.halo_band_rows) {
+        const int end = std::min(height, row + bands.halo_band_rows);
         for (size_t i = 0; i < layers; ++i)
             step(i, row, end);
         progress.advance(end - row);

@@ -108,7 +108,7 @@ class SurveyPass {
 public:
     SurveyPass(const PassContext& context, ShotStream& stream, const RunPlan& plan, const Solution& solution,
                int row_begin, int row_end, bool task);
-    /// Adds rows [row, end): the next band of at most plan.bands.band_rows rows.
+    /// Adds rows [row, end): the next band of at most plan.bands.halo_band_rows rows.
     void add_rows(int row, int end);
     /// The survey's sums of every row (SureSurvey::row_sums).
     std::vector<std::vector<double>> finish();
@@ -165,7 +165,7 @@ public:
     RebuildPass(const PassContext& context, ShotStream& stream, const RunPlan& plan, const Solution& solution,
                 const Survey& survey, const RebuildBasis& modes);
     /// Rebuilds and writes rows [row, end) of every frame: the next band of at
-    /// most plan.bands.band_rows rows.
+    /// most plan.bands.halo_band_rows rows.
     void add_rows(int row, int end);
     RebuildReport finish();
 

@@ -219,8 +219,8 @@ RebuildReport rebuild_shot(const PassContext& context, ShotStream& stream, const
 {
     RebuildPass pass(context, stream, plan, solution, survey, modes);
     const int height = stream.shape().height;
-    for (int row = 0; row < height; row += plan.bands.band_rows)
-        pass.add_rows(row, std::min(height, row + plan.bands.band_rows));
+    for (int row = 0; row < height; row += plan.bands.halo_band_rows)
+        pass.add_rows(row, std::min(height, row + plan.bands.halo_band_rows));
     return pass.finish();
 }
 

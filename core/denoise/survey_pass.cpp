@@ -63,8 +63,8 @@ std::vector<std::vector<double>> survey_rows(const PassContext& context, ShotStr
                                              int row_end, bool task)
 {
     SurveyPass survey(context, stream, plan, solution, row_begin, row_end, task);
-    for (int row = row_begin; row < row_end; row += plan.bands.band_rows)
-        survey.add_rows(row, std::min(row_end, row + plan.bands.band_rows));
+    for (int row = row_begin; row < row_end; row += plan.bands.halo_band_rows)
+        survey.add_rows(row, std::min(row_end, row + plan.bands.halo_band_rows));
     return survey.finish();
 }
 

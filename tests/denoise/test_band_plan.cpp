@@ -37,6 +37,10 @@ void check_plan_is_sound(const BandPlan& plan, std::int64_t budget)
     CHECK(plan.band_rows > 0);
     CHECK((plan.band_rows % kChunkRows == 0 || plan.band_rows == kShape.height));
     CHECK(plan.halo_rows == filter_needs().halo_rows);
+    CHECK(plan.halo_band_rows > 0);
+    CHECK(plan.halo_band_rows <= plan.band_rows);
+    if (plan.halo_band_rows < plan.band_rows)
+        CHECK(plan.band_rows == kChunkRows);
 }
 
 }  // namespace
@@ -103,6 +107,41 @@ TEST_CASE("band plan: a kept shot holds sigma apart, a streamed band in its own 
     PassNeeds narrow = needs;
     narrow.halo_images = 0;
     CHECK(pass_two_bytes(kShape, wider, 32, false) == pass_two_bytes(kShape, narrow, 32, false));
+}
+
+TEST_CASE(
+    "band plan: below a band of a Gram chunk, the passes with a halo walk the longest shorter bands that fit")
+{
+    const PassNeeds needs = filter_needs();
+    // Just below what a 16-row band needs: 15-row bands for the halo passes.
+    std::int64_t sixteen = 0;
+    for (std::int64_t budget = std::int64_t(2048) << 20;; budget -= std::int64_t(1) << 20) {
+        const BandPlan plan = plan_bands(kShape, budget, needs);
+        if (plan.halo_band_rows < kChunkRows) {
+            check_plan_is_sound(plan, budget);
+            CHECK(plan.band_rows == kChunkRows);
+            CHECK(plan.halo_band_rows == kChunkRows - 1);
+            break;
+        }
+        sixteen = plan.estimated_bytes;
+    }
+    // Each row fewer fits a smaller budget, down to one row; below that a usage error.
+    int previous = kChunkRows;
+    std::int64_t budget = sixteen - 1;
+    for (;;) {
+        BandPlan plan;
+        try {
+            plan = plan_bands(kShape, budget, needs);
+        } catch (const Error& error) {
+            CHECK(previous == 1);
+            CHECK(std::string(error.what()).find("of 1 row") != std::string::npos);
+            break;
+        }
+        check_plan_is_sound(plan, budget);
+        CHECK(plan.halo_band_rows < previous);
+        previous = plan.halo_band_rows;
+        budget = plan.estimated_bytes - 1; // the same plan's estimate: one row fewer must follow
+    }
 }
 
 TEST_CASE("band plan: a budget below one band is a usage error naming what a band needs")

@@ -5,6 +5,7 @@
 // than the input in any frame of a shot with a planted transient, sigma follows
 // the true error, and the bits do not depend on threads or on streaming.
 #include "core/common/error.h"
+#include "core/denoise/band_plan.h"
 #include "core/denoise/engine.h"
 #include "tests/denoise/memory_shot.h"
 
@@ -226,9 +227,10 @@ TEST_CASE("estimators: streamed and kept shots, 1 and 2 threads give the same bi
     };
     const Run whole = run_with(std::int64_t(1) << 30, 2);
     CHECK(whole.report.plan.in_memory);
-    // Smaller budgets: the shot kept with pass 2 in windows, then streamed in bands.
-    bool windowed = false, streamed = false;
-    for (std::int64_t memory = 12'000'000; memory > 200'000 && !streamed; memory = memory * 9 / 10) {
+    // Smaller budgets: the shot kept with pass 2 in windows, then streamed in
+    // bands, then streamed with pass 2 in bands shorter than a Gram chunk.
+    bool windowed = false, streamed = false, short_bands = false;
+    for (std::int64_t memory = 12'000'000; memory > 200'000 && !short_bands; memory = memory * 9 / 10) {
         Report report;
         try {
             const Run part = run_with(memory, memory % 2 ? 1 : 2);
@@ -239,12 +241,17 @@ TEST_CASE("estimators: streamed and kept shots, 1 and 2 threads give the same bi
             CHECK(part.sink.rebuilt == whole.sink.rebuilt);
             CHECK(part.sink.sigma == whole.sink.sigma);
             (report.plan.in_memory ? windowed : streamed) = true;
+            if (report.plan.halo_band_rows < report.plan.band_rows) {
+                CHECK(report.plan.band_rows == kChunkRows);
+                short_bands = true;
+            }
         } catch (const Error&) { // too small for a band
             break;
         }
     }
     CHECK(windowed);
     CHECK(streamed);
+    CHECK(short_bands);
     const Run single = run_with(std::int64_t(1) << 30, 1);
     CHECK(single.sink.rebuilt == whole.sink.rebuilt);
     CHECK(single.sink.sigma == whole.sink.sigma);
