@@ -184,13 +184,15 @@ TEST_CASE("denoise output pixels are identical for --threads 1 and 2 and for str
     tall.height = 400;
     testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), tall, noisy_value);
     std::string input = dir.file("in.####.exr") + " --layer DiffInd -q ";
-    REQUIRE(run_modestack("denoise " + input + "--threads 1 -o " + dir.file("a/d.####.exr")).exit_code == 0);
+    REQUIRE(run_modestack("denoise " + input + "--threads 1 -o " + dir.file("a/d.####.exr") + " --json " +
+                          dir.file("a.json"))
+                .exit_code == 0);
     REQUIRE(run_modestack("denoise " + input + "--threads 2 -o " + dir.file("b/d.####.exr")).exit_code == 0);
-    // Streaming: the mode filter's halo (11 rows each side) makes a minimal band taller than
-    // the budget below allows, so compare streamed and kept without it (tests/denoise covers
-    // the filter). Per row of all 24 frames, 40 px: 11.5 KB of selected input, 45.6 KB of pass
-    // 2's buffers (3 per frame + 23 modes) and 23 KB of native rows (24-byte pixels) the source
-    // keeps for the pass-through copy; the estimator choice (the default) adds the rows of
+    // Streaming: the mode filter's halo (11 rows each side) makes a 16-row band taller than
+    // the budget below allows, so first compare streamed and kept without it; with it, the
+    // passes with a halo walk shorter bands (checked after). Per row of all 24 frames, 40 px: 11.5 KB of
+    // selected input, 45.6 KB of pass 2's buffers (3 per frame + 23 modes) and 23 KB of native rows (24-byte
+    // pixels) the source keeps for the pass-through copy; the estimator choice (the default) adds the rows of
     // its windows around each band. 4.4 MB hold a streamed band with its halo (and the
     // outlier marks, 48 KB), but not the kept shot (4.6 MB of input) with a pass-2 window.
     // --max-memory bounds the whole process: the kept run's JSON says what the program and
@@ -208,11 +210,26 @@ TEST_CASE("denoise output pixels are identical for --threads 1 and 2 and for str
     CHECK(json["in_memory"] == false);
     CHECK(json["passes"] == 2);
     CHECK(json["band_rows"] < 400);
+    // With the mode filter and the choice (the default), the same budget fits no
+    // 16-row band with its halo: the survey and pass 2 walk shorter bands, and the
+    // output is the kept run's.
+    const auto default_held =
+        nlohmann::json::parse(read_text(dir.file("a.json")))["memory_held_bytes"].get<std::int64_t>();
+    auto short_bands =
+        run_modestack("denoise " + input + "--max-memory " + std::to_string(default_held + 4'400'000) +
+                      " --json " + dir.file("e.json") + " -o " + dir.file("e/d.####.exr"));
+    REQUIRE_MESSAGE(short_bands.exit_code == 0, short_bands.err);
+    json = nlohmann::json::parse(read_text(dir.file("e.json")));
+    CHECK(json["in_memory"] == false);
+    CHECK(json["band_rows"] == 16);
+    CHECK(json["halo_band_rows"] < 16);
     for (int frame : {1, 13, 24}) {
         char name[64];
         std::snprintf(name, sizeof name, "/d.%04d.exr", frame);
         CHECK(testkit::read_native(dir.path() + "/a" + name) == testkit::read_native(dir.path() + "/b" + name));
         CHECK(testkit::read_native(dir.path() + "/c" + name) == testkit::read_native(dir.path() + "/d" + name));
+        CHECK(testkit::read_native(dir.path() + "/a" + name) ==
+              testkit::read_native(dir.path() + "/e" + name));
         // The pass-through channels come from the rows the source decoded: still the input's.
         std::vector<std::string> others{"ViewLayer.Combined.R", "ViewLayer.Combined.A", "ViewLayer.Depth.Z"};
         char input_name[64];
