@@ -60,6 +60,7 @@ BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, const
 {
     BandPlan plan;
     plan.halo_rows = needs.halo_rows;
+    plan.rolls = !needs.shared_rows;
     plan.budget_bytes = max_memory_bytes;
     const std::int64_t input_row = input_bytes_per_row(shape);
     // Several layers: the rows decoded for all of them, per row of a band with

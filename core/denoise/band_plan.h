@@ -60,6 +60,10 @@ struct BandPlan {
     /// height; the Gram's chunks do, so the statistics keep band_rows.
     int halo_band_rows = 0;
     int halo_rows = 0;       ///< extra rows read above and below a band in pass 2
+    /// A streamed band may keep the rows it shares with the last one
+    /// (ShotStream::band_with_halo); not in a run of several layers, whose
+    /// shared decoded rows serve each band's later reads of its rows.
+    bool rolls = false;
     std::int64_t estimated_bytes = 0;  ///< working memory of the plan
     std::int64_t budget_bytes = 0;     ///< the budget it was made for
 };

@@ -98,7 +98,9 @@ void RebuildPass::add_rows(int row, int end)
     std::vector<float>& ranks = m_ranks;
     RebuildReport& report = m_report;
 
-    Band& data = m_stream.band_with_halo(band, row, end, true);
+    // The band's rows stay as read unless sigma goes into them (below): then
+    // the next band reads its halo again.
+    Band& data = m_stream.band_with_halo(band, row, end, true, estimators.enabled());
     throw_if_cancelled();
     // Rows [first, last) are rebuilt, with their sigma: the band's own, and
     // the choice's reach around them.

@@ -93,10 +93,10 @@ void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning clea
                         as_read.begin() + t * patch_samples);
     }
     const std::int64_t first_sample = static_cast<std::int64_t>(row_begin) * row_samples();
-    if (cleaning == Cleaning::Again &&
-        m_cleaned_samples.empty()) { // no counted read marked them: clean in full
-        lowrank::clean_outliers(band.view(m_shape.frames), m_outlier_options, nullptr);
-    } else if (cleaning == Cleaning::Count) {
+    band.reusable = false;
+    if (cleaning == Cleaning::Again) {
+        clean_again(band.view(m_shape.frames), first_sample);
+    } else {
         measure_roughness(band);
         std::uint8_t* marks =
             m_plan.in_memory || m_cleaned_samples.empty() ? nullptr : m_cleaned_samples.data() + first_sample;
@@ -104,9 +104,6 @@ void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning clea
             lowrank::clean_outliers(band.view(m_shape.frames), m_outlier_options, marks);
         m_outliers.non_finite += found.non_finite;
         m_outliers.fireflies += found.fireflies;
-    } else {
-        lowrank::clean_marked_outliers(band.view(m_shape.frames), m_outlier_options,
-                                       m_cleaned_samples.data() + first_sample);
     }
     if (patch_rows.patches) { // bitwise, so that a replaced NaN counts too
         const std::int64_t first = (patch_rows.row_begin - patch_rows.first_row) * row_samples();
@@ -118,6 +115,67 @@ void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning clea
                     patch_rows.patches->push_back({t, first + i, cleaned});
             }
     }
+}
+
+void ShotStream::clean_again(const lowrank::MutableBandView& rows, std::int64_t first_sample)
+{
+    if (m_cleaned_samples.empty()) // no counted read marked them: clean in full
+        lowrank::clean_outliers(rows, m_outlier_options, nullptr);
+    else
+        lowrank::clean_marked_outliers(rows, m_outlier_options, m_cleaned_samples.data() + first_sample);
+}
+
+bool ShotStream::roll_band(Band& band, int row_begin, int row_end, bool with_pass_through)
+{
+    const int frames = m_shape.frames;
+    // Only forward, overlapping, with the same kind of rows, and not while a farm task records patches.
+    if (!band.reusable || m_patches.patches || row_begin < band.row_begin || row_begin >= band.row_end ||
+        row_end < band.row_end ||
+        with_pass_through != (band.pass_through.size() == static_cast<size_t>(frames)))
+        return false;
+    const std::int64_t samples = row_samples();
+    const std::int64_t old_rows = band.rows, new_rows = samples * (row_end - row_begin);
+    const std::int64_t shift = samples * (row_begin - band.row_begin),
+                       kept = samples * (band.row_end - row_begin);
+    // Frame t moves down, from t·old_rows + shift to t·new_rows, frames in
+    // order. A band that grows (the first ones, whose halo the image's top
+    // clips) is read afresh.
+    if (new_rows > old_rows)
+        return false;
+    float* data = band.storage.data();
+    for (std::int64_t t = 0; t < frames; ++t)
+        std::memmove(data + t * new_rows, data + t * old_rows + shift,
+                     static_cast<size_t>(kept) * sizeof(float));
+    const int new_first = band.row_end;
+    band.row_begin = row_begin;
+    band.row_end = row_end;
+    band.rows = band.stride = new_rows;
+    band.data = data;
+    tbb::parallel_for(0, frames, [&](int frame) {
+        PassThroughRows added;
+        if (new_first < row_end)
+            m_source.read_rows(frame, new_first, row_end, data + frame * new_rows + kept,
+                               with_pass_through ? &added : nullptr);
+        if (!with_pass_through)
+            return;
+        // The other channels' rows: the shared ones kept, the new ones after them.
+        PassThroughRows& rows = band.pass_through[static_cast<size_t>(frame)];
+        if (rows.bytes.empty() || (new_first < row_end && added.bytes.empty()) || rows.row_end != new_first) {
+            rows = {};
+            return;
+        }
+        const size_t row_bytes = rows.bytes.size() / static_cast<size_t>(rows.row_end - rows.row_begin);
+        rows.bytes.erase(rows.bytes.begin(),
+                         rows.bytes.begin() +
+                             static_cast<std::ptrdiff_t>(row_bytes * (row_begin - rows.row_begin)));
+        rows.bytes.insert(rows.bytes.end(), added.bytes.begin(), added.bytes.end());
+        rows.row_begin = row_begin;
+        rows.row_end = row_end;
+    });
+    if (new_first < row_end)
+        clean_again({data + kept, new_rows - kept, frames, new_rows},
+                    static_cast<std::int64_t>(new_first) * samples);
+    return true;
 }
 
 void ShotStream::measure_roughness(const Band& band)
@@ -180,12 +238,15 @@ void ShotStream::finish_whole_shot()
     m_whole_read_ahead = true;
 }
 
-Band& ShotStream::band_with_halo(Band& band, int row, int end, bool with_pass_through)
+Band& ShotStream::band_with_halo(Band& band, int row, int end, bool with_pass_through, bool keeps_rows)
 {
     const int begin = std::max(0, row - m_plan.halo_rows),
               stop = std::min(m_shape.height, end + m_plan.halo_rows);
     if (!m_plan.in_memory) {
-        read_band(band, begin, stop, Cleaning::Again, with_pass_through);
+        throw_if_cancelled();
+        if (!keeps_rows || !m_plan.rolls || !roll_band(band, begin, stop, with_pass_through))
+            read_band(band, begin, stop, Cleaning::Again, with_pass_through);
+        band.reusable = keeps_rows;
         return band;
     }
     band.row_begin = begin;

@@ -31,6 +31,9 @@ struct Band {
     /// Per frame, the other channels of these rows when the read kept them (pass 2
     /// of a streamed shot), for the sink's write of the same rows; empty: none.
     std::vector<PassThroughRows> pass_through;
+    /// Set by band_with_halo for a caller that leaves the rows as read and
+    /// cleaned: the next band of the same pass keeps the rows both share.
+    bool reusable = false;
 
     lowrank::MutableBandView view(int frames) const { return {data, rows, frames, stride}; }
 };
@@ -93,8 +96,11 @@ public:
     void finish_whole_shot();
     /// Rows [row, end) of every frame with the plan's halo rows around them: a
     /// window into the kept shot, or read into `band` (`with_pass_through`: with
-    /// each frame's other channels, for the writes of pass 2).
-    Band& band_with_halo(Band& band, int row, int end, bool with_pass_through);
+    /// each frame's other channels, for the writes of pass 2). With
+    /// `keeps_rows` (the caller writes nothing into the band), a streamed band
+    /// that follows the previous one keeps the rows they share and reads only
+    /// the new ones: a band's halo is decoded once, not once per band.
+    Band& band_with_halo(Band& band, int row, int end, bool with_pass_through, bool keeps_rows = false);
     /// Rows [row_begin, row_end) of one frame as the source gives them, before
     /// the firefly cleaning (the estimator choice judges the rebuild against
     /// the input itself), into `raw` [row][x][channel]; a non-finite sample
@@ -125,6 +131,12 @@ public:
 
 private:
     void begin_pass_progress();
+    /// Moves `band` on to rows [row_begin, row_end), keeping the rows it shares
+    /// with them and reading the rest; false (nothing changed) when it cannot.
+    bool roll_band(Band& band, int row_begin, int row_end, bool with_pass_through);
+    /// A later read's cleaning (Cleaning::Again) of `rows`, whose first sample is
+    /// image sample `first_sample`.
+    void clean_again(const lowrank::MutableBandView& rows, std::int64_t first_sample);
     /// Before the cleaning of a first read: the roughness of `band`'s rows.
     void measure_roughness(const Band& band);
 

@@ -36,8 +36,8 @@ SurveyPass::SurveyPass(const PassContext& context, ShotStream& stream, const Run
 void SurveyPass::add_rows(int row, int end)
 {
     const ShotShape& shape = m_stream.shape();
-    Band& data =
-        m_task ? m_stream.read_task_band(m_band, row, end) : m_stream.band_with_halo(m_band, row, end, false);
+    Band& data = m_task ? m_stream.read_task_band(m_band, row, end)
+                        : m_stream.band_with_halo(m_band, row, end, false, true);
     lowrank::BandView noisy = data.view(shape.frames).view();
     m_coefficients.resize(static_cast<size_t>(data.rows) * m_modes);
     lowrank::MutableBandView coefficient_view{m_coefficients.data(), data.rows, m_modes, data.rows};
