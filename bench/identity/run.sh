@@ -184,13 +184,15 @@ if ! make_inputs; then
 fi
 switch=$inputs/switch/n.####.exr
 orbit=$inputs/orbit/n.####.exr
-# The streamed case: what OLD holds before planning, plus 6 MiB, is between the
-# smallest streamed band and the kept shot of the tall input (since the estimator
-# choice is the default: +5 streams in 16-row bands, +8 keeps the shot; the
-# held figure moves by about 1 MiB from run to run).
+# The streamed case: what OLD holds before planning, plus 5 MiB, is between the
+# smallest streamed band and the kept shot of the tall input (measured with
+# 1a39232, whose budget counts what files really hold: +3 streams in short
+# bands, +4 and +5 in 16-row bands, +6 in 32-row ones, +7 keeps the shot; the
+# held figure moves by about 1 MiB from run to run). An OLD from before
+# 4479781 counted more per file and streams only from +5.
 held_mib=$(ms denoise "$inputs/tall/n.####.exr" --layer DiffInd -q --max-memory 1M -o "$inputs/probe/x.####.exr" 2>&1 |
     sed -n 's/.*alone hold about \([0-9]*\) MiB.*/\1/p')
-streamed_budget=$((${held_mib:-150} + 6))M
+streamed_budget=$((${held_mib:-150} + 5))M
 cycles_ok=0
 if [[ -d $cycles_dir/spin_room/spp4 && -d $cycles_dir/sweep_room/spp4 ]]; then
     cycles_ok=1
