@@ -44,7 +44,7 @@ std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::Seque
                                   std::int64_t output_bytes, const GuideFiles& guides)
 {
     std::int64_t files = output_bytes;
-    int open_files = reader.frame_count();
+    int input_files = reader.frame_count();
     for (int frame = 0; frame < reader.frame_count(); ++frame)
         files += reader.decoder_buffer_bytes(frame);
     for (const io::SequenceReader* guide : guides.readers) {
@@ -56,13 +56,13 @@ std::int64_t engine_memory_budget(std::int64_t max_memory_bytes, const io::Seque
         std::partial_sort(sizes.begin(), sizes.begin() + read, sizes.end(), std::greater<>());
         for (int i = 0; i < read; ++i)
             files += sizes[static_cast<std::size_t>(i)];
-        open_files += guide->frame_count();
+        input_files += guide->frame_count();
     }
     const std::int64_t held = resident_bytes() + files;
     if (held >= max_memory_bytes)
         throw usage_error(fmt::format("--max-memory {} MiB is too small: the program, its {} input files and "
                                       "the outputs' buffers alone hold about {} MiB",
-                                      max_memory_bytes >> 20, open_files, (held >> 20) + 1));
+                                      max_memory_bytes >> 20, input_files, (held >> 20) + 1));
     return max_memory_bytes - held;
 }
 

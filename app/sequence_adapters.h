@@ -108,10 +108,10 @@ public:
     /// --update-beauty: rewrites the beauty (and product AOVs) in the copied rows
     /// and appends the beauty's sigma channels. Before begin().
     void update_beauty(std::unique_ptr<BeautyUpdate> update);
-    /// Opens every output under its temporary name.
     /// Bytes the outputs begin() opens will hold while they are written
     /// (io::copy_buffer_bytes of each, as set up so far).
     std::int64_t open_output_bytes() const;
+    /// Opens every output under its temporary name.
     void begin(const denoise::RebuildStart& start) override;
     /// Renames every finished output into place.
     void commit();

@@ -292,7 +292,7 @@ std::int64_t copy_buffer_bytes(const SequenceReader& reader, int frame_index,
     if (written_with_libdeflate(layout, codec, multipart_output) && !source.multipart() &&
         source.parts.front().zip_layout)
         return static_cast<std::int64_t>(layout.pixel_bytes) * reader.width() *
-               detail::zip_chunk_rows(split_compression(layout.compressions.front()).method == "zips");
+               detail::scanlines_per_chunk(split_compression(layout.compressions.front()).method);
     return detail::openexr_file_buffer_bytes(reader.width(), layout.pixel_bytes,
                                              reader.chunk_rows(frame_index));
 }

@@ -220,15 +220,7 @@ int part_chunk_rows(const OIIO::ImageSpec& spec)
 {
     if (spec.tile_height > 0)
         return spec.tile_height;
-    const std::string compression = spec.get_string_attribute("compression", "none");
-    if (compression == "zip")
-        return 16;
-    if (compression == "dwab")
-        return 256;
-    if (compression == "piz" || compression == "pxr24" || compression == "b44" || compression == "b44a" ||
-        compression == "dwaa")
-        return 32;
-    return 1; // none, rle, zips
+    return detail::scanlines_per_chunk(spec.get_string_attribute("compression", "none"));
 }
 
 }  // namespace
@@ -366,12 +358,6 @@ std::int64_t SequenceReader::decoder_buffer_bytes(int frame_index) const
 std::size_t SequenceReader::native_pixel_bytes(int frame_index) const
 {
     return m_frames.at(frame_index)->native_pixel_bytes;
-}
-
-std::size_t SequenceReader::selected_value_bytes(int frame_index) const
-{
-    const detail::OpenFrame& frame = *m_frames.at(frame_index);
-    return frame.spec.channelformat(frame.selected.front()).size();
 }
 
 const std::vector<std::string>& SequenceReader::channel_names(int frame_index) const

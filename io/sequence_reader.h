@@ -70,9 +70,6 @@ public:
     bool has_unselected_channels(int frame_index) const;
     /// Bytes of one pixel of frame `frame_index` in native types, all channels.
     std::size_t native_pixel_bytes(int frame_index) const;
-    /// Bytes of one value of the first selected channel of frame `frame_index`
-    /// in its native type (what an output stores each added channel in).
-    std::size_t selected_value_bytes(int frame_index) const;
     /// Scanlines per compressed chunk of frame `frame_index` (OpenEXR: 1 for none,
     /// RLE and ZIPS, 16 for ZIP, 32 for PIZ, PXR24, B44 and DWAA, 256 for DWAB;
     /// the tile height of a tiled file): what an open file buffers at a time.

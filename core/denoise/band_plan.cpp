@@ -90,9 +90,12 @@ BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, const
     // Streaming: a read band with its halo and the source's rows, pass 2's
     // buffers and the outlier marks.
     const std::int64_t marks = samples_per_row(shape) * shape.height;
+    const auto read_bytes = [&](int rows, int halo_rows) {
+        return marks + (input_row + shared_row + needs.source_row_bytes) * (rows + 2 * halo_rows) +
+               2 * shared_row * rows;
+    };
     const auto streamed_bytes = [&](int rows) {
-        return marks + (input_row + shared_row + needs.source_row_bytes) * (rows + 2 * needs.halo_rows) +
-               2 * shared_row * rows + pass_two_bytes(shape, needs, rows, false);
+        return read_bytes(rows, needs.halo_rows) + pass_two_bytes(shape, needs, rows, false);
     };
     if (streamed_bytes(smallest_band) <= max_memory_bytes) {
         plan.band_rows =
@@ -106,9 +109,7 @@ BandPlan plan_bands(const ShotShape& shape, std::int64_t max_memory_bytes, const
     int rows = smallest_band - 1;
     while (rows > 1 && streamed_bytes(rows) > max_memory_bytes)
         --rows;
-    const std::int64_t statistics_bytes = marks +
-                                          (input_row + shared_row + needs.source_row_bytes) * smallest_band +
-                                          2 * shared_row * smallest_band;
+    const std::int64_t statistics_bytes = read_bytes(smallest_band, 0);
     if (rows < 1 || streamed_bytes(rows) > max_memory_bytes || statistics_bytes > max_memory_bytes)
         throw usage_error(fmt::format(
             "--max-memory leaves {} MiB for the shot's data, too little for {} frames of "

@@ -98,22 +98,22 @@ void RebuildPass::add_rows(int row, int end)
     std::vector<float>& ranks = m_ranks;
     RebuildReport& report = m_report;
 
-    // The band's rows stay as read unless sigma goes into them (below): then
-    // the next band reads its halo again.
-    Band& data = m_stream.band_with_halo(band, row, end, true, estimators.enabled());
+    // Sigma of the rebuilt rows: prepare leaves each frame's windowed residual
+    // mean there (the pass that finds s²), finished frame by frame. A
+    // streamed band's own input rows hold it (nothing reads them after
+    // prepare); a kept shot's must stay, and so must the input the choice
+    // reads, so sigma then gets its own buffer. A band whose rows stay as read
+    // lends the next band the rows they share.
+    const bool sigma_apart = kept || estimators.enabled();
+    Band& data = m_stream.band_with_halo(band, row, end, true, sigma_apart);
     throw_if_cancelled();
     // Rows [first, last) are rebuilt, with their sigma: the band's own, and
     // the choice's reach around them.
     const int first = std::max(0, row - reach), last = std::min(shape.height, end + reach);
     const std::int64_t offset = (first - data.row_begin) * row_samples, valid = (last - first) * row_samples;
-    // Sigma of the rebuilt rows: prepare leaves each frame's windowed residual
-    // mean there (the pass that finds s²), finished frame by frame. A
-    // streamed band's own input rows hold it (nothing reads them after
-    // prepare); a kept shot's must stay, and so must the input the choice
-    // reads, so sigma then gets its own buffer.
     float* sigma = nullptr;
     std::int64_t sigma_stride = valid;
-    if (kept || estimators.enabled()) {
+    if (sigma_apart) {
         kept_sigma.resize(static_cast<size_t>(valid) * frames);
         sigma = kept_sigma.data();
     } else {

@@ -162,7 +162,7 @@ ZipScanlineWriter::open(const std::string& path, const std::string& reported_pat
     state->width = spec.width;
     state->height = spec.height;
     state->first_y = data_window.min.y;
-    state->lines_per_chunk = zip_chunk_rows(compression != EXR_COMPRESSION_ZIP);
+    state->lines_per_chunk = compression == EXR_COMPRESSION_ZIP ? 16 : 1;
     state->pixel_bytes = layout.pixel_bytes;
 
     // A header this writer cannot build (an attribute OpenEXR's Core refuses) is

@@ -17,12 +17,6 @@ namespace modestack::io::detail {
 struct OpenFrame;
 struct OutputLayout;
 
-/// Scanlines per chunk of a ZIP file (16) or a ZIPS file (1), as OpenEXR stores them.
-inline int zip_chunk_rows(bool zips)
-{
-    return zips ? 1 : 16;
-}
-
 class ZipScanlineWriter {
 public:
     /// A writer for `path` that copies the header of `source`'s file (every
