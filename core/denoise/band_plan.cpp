@@ -32,6 +32,22 @@ int largest_band(int limit, const Fits& fits)
     return best;
 }
 
+// A choice worker's per-pixel spread (temporal_spread.h) of the band's rows,
+// in images of the shot's channels: its spread and terms, 2 floats a pixel
+// (its judged samples are one more image of those rows).
+std::int64_t spread_images(const ShotShape& shape)
+{
+    constexpr std::int64_t floats_per_pixel = 2;
+    return (floats_per_pixel + shape.channels - 1) / shape.channels;
+}
+
+// The spread's terms of every pair of frames of a band's rows (one float a
+// pixel and pair), in images of the shot's channels.
+std::int64_t spread_pair_images(const ShotShape& shape)
+{
+    return (std::max<std::int64_t>(shape.frames - 1, 0) + shape.channels - 1) / shape.channels;
+}
+
 }  // namespace
 
 std::int64_t input_bytes_per_row(const ShotShape& shape)
@@ -49,7 +65,10 @@ std::int64_t pass_two_bytes(const ShotShape& shape, const PassNeeds& needs, int 
         frames * (computed_rows + 2 * needs.sigma_halo_rows) +
         (needs.band_images + kSigmaScratchImages) * computed_rows +
         (sigma_kept_apart ? frames * computed_rows : 0) +
-        (needs.choice_rows > 0 ? needs.choice_workers * (computed_rows + 2 * needs.choice_rows) : 0);
+        (needs.choice_rows > 0 ? needs.choice_workers * (computed_rows + 2 * needs.choice_rows +
+                                                         (1 + spread_images(shape)) * band_rows) +
+                                     spread_pair_images(shape) * band_rows
+                               : 0);
     const std::int64_t survey_only = static_cast<std::int64_t>(needs.survey_images) * halo_band_rows;
     const std::int64_t images =
         static_cast<std::int64_t>(needs.halo_images) * halo_band_rows + std::max(pass_two_only, survey_only);

@@ -3,6 +3,7 @@
 #include "core/common/avx2_clones.h"
 #include "core/common/error.h"
 #include "core/denoise/non_local_means.h"
+#include "core/denoise/temporal_spread.h"
 
 #include <algorithm>
 #include <cmath>
@@ -231,6 +232,11 @@ EstimatorOptions parse_estimators(const std::string& list)
 int estimator_rebuilt_reach(const EstimatorOptions& options)
 {
     return options.enabled() ? 2 * options.radius + 1 : 0; // the window of v's window, and the high-pass
+}
+
+int estimator_frame_reach(const EstimatorOptions& options)
+{
+    return options.input ? kSpreadFrames : 0;
 }
 
 int estimator_input_reach(const EstimatorOptions& options)
@@ -511,6 +517,22 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     const double z_squared = options.significance * options.significance;
     const double below_limit = options.below_significance * options.below_significance * kBelowDeviation *
                                kBelowDeviation; // × scale², as one product in the same order
+    const bool spread_test = estimator_frame_reach(options) > 0 && frame.spread != nullptr;
+    // The per-pixel test's reach in spreads by the spread's number of terms n:
+    // below z·√b(n); above, √(2n) more.
+    std::array<double, 3 * kSpreadFrames + 1> below_reaches{}, above_reaches{};
+    for (int n = 1; spread_test && n <= 3 * kSpreadFrames; ++n) {
+        below_reaches[static_cast<size_t>(n)] = options.below_significance * std::sqrt(spread_bound(n));
+        above_reaches[static_cast<size_t>(n)] = std::sqrt(2.0 * n) + below_reaches[static_cast<size_t>(n)];
+    }
+    auto below_reach = [&](int n) {
+        return n <= 3 * kSpreadFrames ? below_reaches[static_cast<size_t>(n)]
+                                      : options.below_significance * std::sqrt(spread_bound(n));
+    };
+    auto above_reach = [&](int n) {
+        return n <= 3 * kSpreadFrames ? above_reaches[static_cast<size_t>(n)]
+                                      : std::sqrt(2.0 * n) + below_reach(n);
+    };
     std::vector<double> floor(static_cast<size_t>(channels));
     if (options.non_local) {
         work.biased.assign(static_cast<size_t>(end - row) * width, 0);
@@ -531,6 +553,9 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
         const float* engine_sigma = frame.sigma + (y - frame.rebuilt_begin) * row_samples;
         const float* below_row = below_test ? work.below_mean.row(y) : nullptr;
         const float* scale_row = below_test ? work.noise_scale_mean.row(y) : nullptr;
+        const std::int64_t spread_offset = static_cast<std::int64_t>(y - frame.spread_begin) * width;
+        const float* spread_row = spread_test ? frame.spread + spread_offset : nullptr;
+        const float* terms_row = spread_test ? frame.spread_terms + spread_offset : nullptr;
         const double kernel_y_squares[2] = {kernel_y[0].squares.empty() ? 0.0 : kernel_y[0].squares[y],
                                             kernel_y[1].squares.empty() ? 0.0 : kernel_y[1].squares[y]};
         for (int x = 0; x < width; ++x) {
@@ -556,17 +581,38 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 if (significant(mean, mean, gain_square_mean[k][x]) && (chosen == 0 || local < least))
                     chosen = k, least = local;
             }
-            bool rejected = chosen != 0; // the rebuild: by a candidate's gain, or by the one-sided test
+            // The rebuild: by a candidate's gain, by the one-sided test, or by the per-pixel test.
+            bool rejected = chosen != 0;
             if (chosen == 0 && below_test) {
                 const int near = clipped_window(width, height, x, y, 1);
                 const double scale = scale_row[x] * frame.noise_factor;
                 const double excess = below_row[x] + kBelowMean * scale;
                 rejected = excess < 0 && excess * excess * near > below_limit * scale * scale;
-                if (rejected)
-                    for (int k = 1; k < kEstimators; ++k)
-                        if (used[k] && (chosen == 0 || near_sure[k][x] < least))
-                            chosen = k, least = near_sure[k][x];
             }
+            // The input steady in time where the rebuild is far from it: the
+            // input is taken (its risk is that small spread; a blur's SURE at a
+            // bright edge can fall far below its true error).
+            if (!rejected && spread_row != nullptr) {
+                const float *input = input_at(y) + static_cast<std::int64_t>(x) * channels,
+                            *rebuilt = rebuilt_at(y) + static_cast<std::int64_t>(x) * channels;
+                double distance = 0;
+                for (int c = 0; c < channels; ++c)
+                    distance += static_cast<double>(input[c]) - rebuilt[c];
+                distance *= per_channel;
+                // z spreads' upper bound below; above, beyond what a lone bright
+                // sample reaches (√(2n) spreads from its neighbour in time) by
+                // that neighbour's own z.
+                const int terms = static_cast<int>(terms_row[x]);
+                if (terms > 0) {
+                    const double reach = distance < 0 ? below_reach(terms) : above_reach(terms);
+                    if (distance * distance > reach * reach * spread_row[x])
+                        rejected = true, chosen = static_cast<int>(Estimator::Input);
+                }
+            }
+            if (rejected && chosen == 0) // the candidate with the least SURE over the 3×3 pixels around
+                for (int k = 1; k < kEstimators; ++k)
+                    if (used[k] && (chosen == 0 || near_sure[k][x] < least))
+                        chosen = k, least = near_sure[k][x];
             // Sigma: the chosen one's variance part, plus its pooled SURE's excess where significant.
             double floor_sum = 0;
             for (int c = 0; c < channels; ++c) {

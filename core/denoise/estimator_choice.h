@@ -39,6 +39,16 @@
 // squares, so a heavy upper tail widens it: the test is conservative
 // where the noise is heavy-tailed (on indirect light it changed 0.03 % of the
 // pixels of one benchmark shot and none of six others).
+// Both window tests miss a failure at single pixels whose input is far
+// cleaner than s says (the edge of a moving hard shadow lit by a point light).
+// There the input's spread in time (temporal_spread.h: its frame-to-frame
+// differences at the pixel and its row neighbours over the 4 frames on the
+// quieter side) is the evidence: the rebuild is rejected and the input taken
+// where the input lies below the rebuild by more than z·√(b·v̂), or above it by
+// more than (√(2n) + z)·√(b·v̂), with z the one-sided test's, n the spread's
+// terms and b its upper-bound factor (spread_bound): a lone firefly cannot pass
+// above. The input, not the least 3×3 SURE: next to a bright edge a blur's
+// SURE falls far below its error.
 // Non-local means of the input (non_local_means.h) keeps the hard edges a
 // Gaussian blurs, but its SURE is biased low on rendered noise, so it is never
 // evidence against the rebuild or any linear candidate: where the rebuild has
@@ -77,7 +87,8 @@ struct EstimatorOptions {
     double significance = 2.0; ///< z: standard errors a switch away from the rebuild needs
     int radius = 3;            ///< risk window radius (3: 7×7 pixels)
     /// z of the one-sided test that rejects the rebuild where the input lies far
-    /// below it over 3×3 pixels, in the noise's own scale (see the file comment).
+    /// below it over 3×3 pixels, in the noise's own scale, and of the per-pixel
+    /// test in the input's spread in time (see the file comment).
     double below_significance = 6.0;
     bool enabled() const { return input || spatial || non_local; }
 };
@@ -89,6 +100,9 @@ EstimatorOptions parse_estimators(const std::string& list);
 /// Rows beyond a band's own rows that the choice needs rebuilt (with their
 /// sigma and kept noise): the risk window of the high-pass's window.
 int estimator_rebuilt_reach(const EstimatorOptions& options);
+/// Frames on each side of a frame whose input the choice reads (the per-pixel
+/// test's spread, temporal_spread.h; 0 without the input as a candidate).
+int estimator_frame_reach(const EstimatorOptions& options);
 /// Rows beyond a band's own rows that the choice needs of the input.
 int estimator_input_reach(const EstimatorOptions& options);
 
@@ -110,6 +124,13 @@ struct ChoiceFrame {
     /// This frame's noise level over the shot's (frame_noise.h): the
     /// one-sided test takes noise_scale times this.
     double noise_factor = 1;
+    /// Per pixel of rows from spread_begin (covering the rows chosen): the
+    /// input's spread around this frame and its number of terms
+    /// (temporal_spread.h). Null, or no input among the estimators: no
+    /// per-pixel test.
+    const float* spread = nullptr;
+    const float* spread_terms = nullptr;
+    int spread_begin = 0;
     double leverage = 0;
     int rebuilt_begin = 0, rebuilt_end = 0;
 };

@@ -4,16 +4,23 @@
 #include "core/denoise/block_gram.h"
 #include "core/denoise/frame_noise.h"
 #include "core/denoise/stage_modes.h"
+#include "core/denoise/temporal_spread.h"
 #include "core/lowrank/confidence.h"
 #include "core/lowrank/projection.h"
 
 #include <fmt/format.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
+#include <map>
+#include <memory>
 #include <mutex>
+#include <set>
 
 namespace modestack::denoise {
 namespace {
@@ -236,8 +243,14 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     context.progress.begin(fmt::format("writing {} of {} frames", written.size(), shape.frames),
                            static_cast<std::int64_t>(written.size()));
     struct Buffers {
-        std::vector<float> noisy, unfiltered, kept_noise, sigma, output, raw, chosen, chosen_sigma;
+        std::vector<float> unfiltered, kept_noise, sigma, output, chosen, chosen_sigma;
         std::vector<std::uint8_t> chosen_estimators; // per pixel
+        std::vector<float> spread, spread_terms, judged; // the per-pixel test's
+    };
+    // A frame as read: cleaned by its patches, and for a written frame also as
+    // read with only NaN/Inf cleaned (the choice judges that) and its other channels.
+    struct ReadFrame {
+        std::vector<float> cleaned, raw;
         PassThroughRows pass_through;
     };
     const EstimatorOptions& estimators = settings.estimators;
@@ -249,67 +262,116 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
         noise_scale_rows(shot.noise_variance.data(), samples / shape.channels, shape.channels,
                          noise_scale.data());
     }
+    auto read_frame = [&](int t, ReadFrame& frame) {
+        const bool own = context.sink.writes_frame(t);
+        frame.cleaned.resize(static_cast<size_t>(samples));
+        context.source.read_rows(t, 0, shape.height, frame.cleaned.data(),
+                                 own ? &frame.pass_through : nullptr);
+        if (own && estimators.enabled())
+            frame.raw = frame.cleaned;
+        for (const ModeImages::Patch& patch : shot.patches[static_cast<size_t>(t)]) {
+            frame.cleaned[static_cast<size_t>(patch.sample)] = patch.value;
+            if (own && estimators.enabled() && !std::isfinite(frame.raw[static_cast<size_t>(patch.sample)]))
+                frame.raw[static_cast<size_t>(patch.sample)] = patch.value;
+        }
+    };
+    // The written frames a chunk at a time, with the frames around them that
+    // the choice's spread reads: each frame is read once when the frames
+    // written are a range, and the frames held are the chunk's and its reach.
+    const int reach = estimator_frame_reach(estimators);
+    const size_t chunk = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
+    std::map<int, std::unique_ptr<ReadFrame>> held;
     tbb::enumerable_thread_specific<Buffers> thread_buffers;
     std::mutex counts_mutex;
-    tbb::parallel_for(0, static_cast<int>(written.size()), [&](int k) {
-        throw_if_cancelled();
-        const int t = written[static_cast<size_t>(k)];
-        Buffers& buffers = thread_buffers.local();
-        for (std::vector<float>* buffer :
-             {&buffers.noisy, &buffers.unfiltered, &buffers.kept_noise, &buffers.sigma, &buffers.output})
-            buffer->resize(static_cast<size_t>(samples));
-        context.source.read_rows(t, 0, shape.height, buffers.noisy.data(), &buffers.pass_through);
-        if (estimators.enabled()) // the choice judges the input as read, its NaN/Inf cleaned
-            buffers.raw = buffers.noisy;
-        for (const ModeImages::Patch& patch : shot.patches[static_cast<size_t>(t)]) {
-            buffers.noisy[static_cast<size_t>(patch.sample)] = patch.value;
-            if (estimators.enabled() && !std::isfinite(buffers.raw[static_cast<size_t>(patch.sample)]))
-                buffers.raw[static_cast<size_t>(patch.sample)] = patch.value;
-        }
-        lowrank::rebuild_from_coefficients({shot.residual.data(), samples, shot.residual_modes, samples},
-                                           modes.temporal_rank.row(t),
-                                           {buffers.unfiltered.data(), samples, 1, samples});
-        if (shot.gain_modes > 0)
-            rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
-                                          buffers.kept_noise.data());
-        lowrank::frame_sigma(buffers.noisy.data(), buffers.unfiltered.data(), image, 0, shape.height,
-                             rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
-                             shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, buffers.sigma.data());
-        std::vector<float>& output = shot.output_modes > 0 ? buffers.output : buffers.unfiltered;
-        if (shot.output_modes > 0)
-            lowrank::rebuild_from_coefficients({shot.output.data(), samples, shot.output_modes, samples},
-                                               output_temporal.row(t), {output.data(), samples, 1, samples});
-        const NonNegativeCounts counts = make_non_negative(
-            {output.data(), samples, 1, samples}, settings.non_negative, settings.non_negative_floor);
-        {
-            std::lock_guard<std::mutex> lock(counts_mutex);
-            report.non_negative += counts;
-        }
-        if (estimators.enabled()) { // the whole frame at once: every row the choice reads is here
-            ChoiceFrame frame;
-            frame.image = image;
-            frame.input = buffers.raw.data(), frame.input_begin = 0, frame.input_end = shape.height;
-            frame.rebuilt = output.data(), frame.sigma = buffers.sigma.data();
-            frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr;
-            frame.noise_scale = noise_scale.data();
-            frame.noise_factor = solved.frame_noise_factors.at(static_cast<size_t>(t));
-            frame.leverage = modes.leverages(t);
-            frame.rebuilt_begin = 0, frame.rebuilt_end = shape.height;
-            buffers.chosen.resize(static_cast<size_t>(samples)),
-                buffers.chosen_sigma.resize(static_cast<size_t>(samples));
-            buffers.chosen_estimators.resize(static_cast<size_t>(image.width) * image.height);
-            report.estimator_choice[static_cast<size_t>(t)] =
-                choose_frame_rows(settings, frame, 0, shape.height, buffers.chosen.data(),
-                                  buffers.chosen_sigma.data(), buffers.chosen_estimators.data());
-            context.sink.write_rows(t, 0, shape.height, buffers.chosen.data(), buffers.chosen_sigma.data(),
-                                    &buffers.pass_through);
-            context.sink.write_choice_rows(t, 0, shape.height, buffers.chosen_estimators.data());
-        } else {
-            context.sink.write_rows(t, 0, shape.height, output.data(), buffers.sigma.data(),
-                                    &buffers.pass_through);
-        }
-        context.progress.advance(1);
-    });
+    for (size_t from = 0; from < written.size(); from += chunk) {
+        const size_t to = std::min(written.size(), from + chunk);
+        std::set<int> needed;
+        for (size_t k = from; k < to; ++k)
+            for (int g = std::max(0, written[k] - reach); g <= std::min(shape.frames - 1, written[k] + reach);
+                 ++g)
+                needed.insert(g);
+        for (auto it = held.begin(); it != held.end();)
+            it = needed.count(it->first) ? std::next(it) : held.erase(it);
+        std::vector<int> missing;
+        for (int g : needed)
+            if (!held.count(g))
+                missing.push_back(g), held.emplace(g, std::make_unique<ReadFrame>());
+        tbb::parallel_for(0, static_cast<int>(missing.size()), [&](int i) {
+            throw_if_cancelled();
+            read_frame(missing[static_cast<size_t>(i)], *held.at(missing[static_cast<size_t>(i)]));
+        });
+        tbb::parallel_for(static_cast<int>(from), static_cast<int>(to), [&](int k) {
+            throw_if_cancelled();
+            const int t = written[static_cast<size_t>(k)];
+            Buffers& buffers = thread_buffers.local();
+            ReadFrame& own = *held.at(t);
+            for (std::vector<float>* buffer :
+                 {&buffers.unfiltered, &buffers.kept_noise, &buffers.sigma, &buffers.output})
+                buffer->resize(static_cast<size_t>(samples));
+            lowrank::rebuild_from_coefficients({shot.residual.data(), samples, shot.residual_modes, samples},
+                                               modes.temporal_rank.row(t),
+                                               {buffers.unfiltered.data(), samples, 1, samples});
+            if (shot.gain_modes > 0)
+                rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
+                                              buffers.kept_noise.data());
+            lowrank::frame_sigma(own.cleaned.data(), buffers.unfiltered.data(), image, 0, shape.height,
+                                 rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
+                                 shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr,
+                                 buffers.sigma.data());
+            std::vector<float>& output = shot.output_modes > 0 ? buffers.output : buffers.unfiltered;
+            if (shot.output_modes > 0)
+                lowrank::rebuild_from_coefficients({shot.output.data(), samples, shot.output_modes, samples},
+                                                   output_temporal.row(t),
+                                                   {output.data(), samples, 1, samples});
+            const NonNegativeCounts counts = make_non_negative(
+                {output.data(), samples, 1, samples}, settings.non_negative, settings.non_negative_floor);
+            {
+                std::lock_guard<std::mutex> lock(counts_mutex);
+                report.non_negative += counts;
+            }
+            if (estimators.enabled()) { // the whole frame at once: every row the choice reads is here
+                ChoiceFrame frame;
+                frame.image = image;
+                frame.input = own.raw.data(), frame.input_begin = 0, frame.input_end = shape.height;
+                frame.rebuilt = output.data(), frame.sigma = buffers.sigma.data();
+                frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr;
+                frame.noise_scale = noise_scale.data();
+                frame.noise_factor = solved.frame_noise_factors.at(static_cast<size_t>(t));
+                if (reach > 0) { // the per-pixel test's spread, as a whole run makes it
+                    SpreadWindow window;
+                    window.image = image, window.rows_begin = 0;
+                    for (int j = 0; j < static_cast<int>(window.frames.size()); ++j) {
+                        const int g = t + j - kSpreadFrames;
+                        if (g >= 0 && g < shape.frames && j != kSpreadFrames)
+                            window.frames[static_cast<size_t>(j)] = held.at(g)->cleaned.data();
+                    }
+                    buffers.judged.resize(static_cast<size_t>(samples));
+                    judged_samples(own.raw.data(), own.cleaned.data(), samples, buffers.judged.data());
+                    window.frames[kSpreadFrames] = buffers.judged.data();
+                    const size_t pixels = static_cast<size_t>(image.width) * image.height;
+                    buffers.spread.resize(pixels), buffers.spread_terms.resize(pixels);
+                    spread_rows(window, 0, shape.height, buffers.spread.data(), buffers.spread_terms.data());
+                    frame.spread = buffers.spread.data(), frame.spread_terms = buffers.spread_terms.data();
+                    frame.spread_begin = 0;
+                }
+                frame.leverage = modes.leverages(t);
+                frame.rebuilt_begin = 0, frame.rebuilt_end = shape.height;
+                buffers.chosen.resize(static_cast<size_t>(samples)),
+                    buffers.chosen_sigma.resize(static_cast<size_t>(samples));
+                buffers.chosen_estimators.resize(static_cast<size_t>(image.width) * image.height);
+                report.estimator_choice[static_cast<size_t>(t)] =
+                    choose_frame_rows(settings, frame, 0, shape.height, buffers.chosen.data(),
+                                      buffers.chosen_sigma.data(), buffers.chosen_estimators.data());
+                context.sink.write_rows(t, 0, shape.height, buffers.chosen.data(),
+                                        buffers.chosen_sigma.data(), &own.pass_through);
+                context.sink.write_choice_rows(t, 0, shape.height, buffers.chosen_estimators.data());
+            } else {
+                context.sink.write_rows(t, 0, shape.height, output.data(), buffers.sigma.data(),
+                                        &own.pass_through);
+            }
+            context.progress.advance(1);
+        });
+    }
     context.progress.end();
     report.seconds_rebuild = seconds_since(start);
     return report;

@@ -172,7 +172,9 @@ public:
 private:
     struct Chosen { // one frame's estimator choice
         std::vector<float> values, sigma;
-        std::vector<std::uint8_t> estimators; // per pixel
+        std::vector<std::uint8_t> estimators;    // per pixel
+        std::vector<float> spread, spread_terms; // per pixel: the input's spread in time
+        std::vector<float> judged;               // the frame's rows the spread judges
     };
     const PassContext& m_context;
     ShotStream& m_stream;
@@ -190,6 +192,7 @@ private:
     tbb::enumerable_thread_specific<ScratchBuffer<float>> m_raw_of_worker; // one frame's input rows the
                                                                            // choice reads, unclean
     std::vector<float> m_noise_scale; // the choice's noise scale of the band's rebuilt rows
+    std::vector<float> m_pair_terms;  // the spread's per-pixel terms of each pair of frames, the band's rows
     std::vector<float> m_ranks;
 };
 

@@ -6,6 +6,7 @@
 // tasks too), and choose_frame_rows, which a farm's write task shares, live
 // here beside it.
 #include "core/denoise/passes.h"
+#include "core/denoise/temporal_spread.h"
 
 #include "core/lowrank/projection.h"
 
@@ -162,6 +163,20 @@ void RebuildPass::add_rows(int row, int end)
         noise_scale_rows(rebuilder.noise_variance().data(), valid / shape.channels, shape.channels,
                          m_noise_scale.data());
     }
+    // The spread's differences between the band's cleaned frames, made once
+    // for every frame whose window holds them (pair t: frames t and t + 1).
+    const bool spread = estimators.enabled() && estimator_frame_reach(estimators) > 0;
+    const std::int64_t own_pixels = static_cast<std::int64_t>(shape.width) * (end - row);
+    const std::int64_t own_first = (row - data.row_begin) * row_samples;
+    if (spread) {
+        m_pair_terms.resize(static_cast<size_t>(std::max(frames - 1, 0) * own_pixels));
+        tbb::parallel_for(0, frames - 1, [&](int t) {
+            spread_pair_rows({shape.width, shape.height, shape.channels}, row,
+                             data.data + t * data.stride + own_first,
+                             data.data + (t + 1) * data.stride + own_first, row, end,
+                             m_pair_terms.data() + t * own_pixels);
+        });
+    }
     tbb::parallel_for(0, frames, [&](int frame) { // a window of the kept shot has no pass-through rows
         const PassThroughRows* pass_through =
             data.pass_through.empty() ? nullptr : &data.pass_through[static_cast<size_t>(frame)];
@@ -187,9 +202,30 @@ void RebuildPass::add_rows(int row, int end)
         choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;
         choice_frame.noise_scale = m_noise_scale.data();
         choice_frame.noise_factor = report.frame_noise_factors[static_cast<size_t>(frame)];
+        Chosen& chosen = m_chosen_of_worker.local();
+        if (spread) { // the per-pixel test's spread, from the band's rows
+            SpreadWindow window;
+            window.image = choice_frame.image, window.rows_begin = row;
+            for (int k = 0; k < static_cast<int>(window.frames.size()); ++k) {
+                const int t = frame + k - kSpreadFrames;
+                if (t >= 0 && t < frames && k != kSpreadFrames)
+                    window.frames[static_cast<size_t>(k)] = data.data + t * data.stride + own_first;
+                if (t >= 0 && t + 1 < frames && k < static_cast<int>(window.pair_terms.size()))
+                    window.pair_terms[static_cast<size_t>(k)] = m_pair_terms.data() + t * own_pixels;
+            }
+            chosen.judged.resize(static_cast<size_t>(own));
+            judged_samples(raw.data() + (row - raw_begin) * row_samples,
+                           data.data + frame * data.stride + own_first, own, chosen.judged.data());
+            window.frames[kSpreadFrames] = chosen.judged.data();
+            chosen.spread.resize(static_cast<size_t>(own_pixels)),
+                chosen.spread_terms.resize(static_cast<size_t>(own_pixels));
+            spread_rows(window, row, end, chosen.spread.data(), chosen.spread_terms.data());
+            choice_frame.spread = chosen.spread.data(),
+            choice_frame.spread_terms = chosen.spread_terms.data();
+            choice_frame.spread_begin = row;
+        }
         choice_frame.leverage = modes.leverages(frame);
         choice_frame.rebuilt_begin = first, choice_frame.rebuilt_end = last;
-        Chosen& chosen = m_chosen_of_worker.local();
         chosen.values.resize(static_cast<size_t>(own)), chosen.sigma.resize(static_cast<size_t>(own));
         chosen.estimators.resize(static_cast<size_t>(shape.width) * (end - row));
         report.estimator_choice[static_cast<size_t>(frame)].add(

@@ -5,6 +5,7 @@
 // refused.
 #include "core/common/error.h"
 #include "core/denoise/engine.h"
+#include "core/denoise/estimator_choice.h"
 #include "core/denoise/farm_tasks.h"
 #include "core/denoise/whitening.h"
 #include "tests/denoise/memory_shot.h"
@@ -138,9 +139,11 @@ Result run_staged(MemoryShot& shot, const Settings& settings, const std::vector<
         CountingSource source(shot);
         joined.report = write_task({source, sink, settings, Progress::silent()}, solved, survey, modes);
 
+        // Its own frames and, for the choice's spread, those within its reach, each once.
+        const int reach = estimator_frame_reach(settings.estimators);
         for (int t = 0; t < frames; ++t) {
             CAPTURE(t);
-            CHECK(source.reads[std::size_t(t)] == (t >= first && t < last ? 1 : 0));  // its own frames, once
+            CHECK(source.reads[std::size_t(t)] == (t >= first - reach && t < last + reach ? 1 : 0));
             if (t >= first && t < last) {
                 joined.sink.rebuilt[std::size_t(t)] = sink.rebuilt[std::size_t(t)];
                 joined.sink.sigma[std::size_t(t)] = sink.sigma[std::size_t(t)];
