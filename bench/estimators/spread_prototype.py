@@ -33,11 +33,12 @@ from prototype import box, read_shot, transient_mask  # noqa: E402
 from scenes import relative, score  # noqa: E402
 
 
-def spread(y, k):
+def spread(y, k, pool):
     """Per frame and pixel: v of the quieter side (inf where there is none)."""
     frames = y.shape[0]
     squared = ((y[1:] - y[:-1]) ** 2 / 2).mean(3)  # [g] = between frames g and g + 1
-    pooled = np.stack([box(d[..., None], 1)[..., 0] for d in squared])
+    axes = (0, 1) if pool == 'square' else (1,)  # [row, x, 1]: 3x3, or the 3 pixels of the row
+    pooled = np.stack([box(d[..., None], 1, axes)[..., 0] for d in squared])
     sums = np.concatenate([np.zeros((1,) + pooled.shape[1:]), np.cumsum(pooled, 0)])
     v = np.full(y.shape[:3], np.inf)
     for f in range(frames):
@@ -54,6 +55,8 @@ def main():
         parser.add_argument(name)
     parser.add_argument('--frames', type=int, default=4, help='K: frames on each side (4)')
     parser.add_argument('--z', type=float, nargs='+', default=[6.0])
+    parser.add_argument('--pool', choices=('row', 'square'), default='row',
+                        help='pixels pooled: the 3 of the row (default) or the 3x3 around')
     parser.add_argument('--transient', help='FIRST-LAST: frames whose changing pixels are scored apart')
     args = parser.parse_args()
     noisy = read_shot(args.noisy, args.layer)
@@ -72,8 +75,9 @@ def main():
     default = read_shot(args.default, args.layer)
     sigma = read_shot(args.default, args.layer + '.sigma')
     rebuilt = read_shot(args.rebuild, args.layer)
-    v = spread(noisy, args.frames)
-    terms = 9 * args.frames  # n inside the image (fewer at its borders and the shot's ends)
+    v = spread(noisy, args.frames, args.pool)
+    # n inside the image (fewer at its borders and the shot's ends)
+    terms = (9 if args.pool == 'square' else 3) * args.frames
     kept = np.all(np.abs(default - rebuilt) < 1e-6, 3)
     distance = (noisy - rebuilt).mean(3)
     print(score('input', noisy, None, ref, noise, noisy_rel, transient, frames_noisy))
