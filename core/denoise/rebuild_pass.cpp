@@ -165,7 +165,7 @@ void RebuildPass::add_rows(int row, int end)
     }
     // The spread's differences between the band's cleaned frames, made once
     // for every frame whose window holds them (pair t: frames t and t + 1).
-    const bool spread = estimators.enabled() && estimator_frame_reach(estimators) > 0;
+    const bool spread = estimator_frame_reach(estimators) > 0;
     const std::int64_t own_pixels = static_cast<std::int64_t>(shape.width) * (end - row);
     const std::int64_t own_first = (row - data.row_begin) * row_samples;
     if (spread) {
@@ -217,10 +217,10 @@ void RebuildPass::add_rows(int row, int end)
             judged_samples(raw.data() + (row - raw_begin) * row_samples,
                            data.data + frame * data.stride + own_first, own, chosen.judged.data());
             window.frames[kSpreadFrames] = chosen.judged.data();
-            chosen.spread.resize(static_cast<size_t>(own_pixels)),
-                chosen.spread_terms.resize(static_cast<size_t>(own_pixels));
+            chosen.spread.resize(static_cast<size_t>(own_pixels));
+            chosen.spread_terms.resize(static_cast<size_t>(own_pixels));
             spread_rows(window, row, end, chosen.spread.data(), chosen.spread_terms.data());
-            choice_frame.spread = chosen.spread.data(),
+            choice_frame.spread = chosen.spread.data();
             choice_frame.spread_terms = chosen.spread_terms.data();
             choice_frame.spread_begin = row;
         }
