@@ -102,12 +102,14 @@ nlohmann::ordered_json shot_json(const io::FrameSequence& input, const io::Seque
 
 void add_stage_options(CLI::App& command, StageOptions& options)
 {
-    command.add_option("--stage", options.stage,
-                       "Run one farm task of the denoise (README, farm jobs), in this order: stats (-o the "
-                       "statistics of --rows), solve (-o the temporal modes from every --stats file), survey (-o "
-                       "the mode filter's sums of --rows), modes (-o the mode images of --rows) and write (the "
-                       "outputs of --frames, reading only those frames); the outputs are byte-identical to one "
-                       "run with the same options");
+    command.add_option(
+        "--stage", options.stage,
+        "Run one farm task of the denoise (README, farm jobs), in this order: stats (-o the "
+        "statistics of --rows), solve (-o the temporal modes from every --stats file), survey (-o "
+        "the mode filter's sums of --rows), modes (-o the mode images of --rows) and write (the "
+        "outputs of --frames, reading only those frames and, with input among --estimators, the 4 "
+        "on each side); the outputs are byte-identical to one "
+        "run with the same options");
     command.add_option("--rows", options.rows,
                        "--stage stats, survey and modes: the rows of this task, Y0-Y1 (inclusive; for stats Y0 a "
                        "multiple of 64, Y1 + 1 too or the last row) or I/K (share I of K)");

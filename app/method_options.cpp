@@ -54,7 +54,9 @@ void add_method_options(CLI::App& command, MethodOptions& options)
         "as read), spatial (Gaussian blurs of the input, 1 and 2 px), nlmeans (non-local means of the input: "
         "keeps hard shadow edges; only in place of a candidate whose risk shows a bias where the rebuild was "
         "rejected); 'rebuild' alone turns the choice off. "
-        "The rebuild is kept unless another's risk (SURE, 7x7) is lower by 2 standard errors; sigma is the "
+        "The rebuild is kept unless another's risk (SURE, 7x7) is lower by 2 standard errors, or the input "
+        "lies far below it over 3x3 pixels, or the input at a pixel stays put over 4 frames while the "
+        "rebuild is far from it (then the input is taken); sigma is the "
         "chosen value's estimated error. Default auto: rebuild,input,spatial,nlmeans, but the rebuild alone "
         "with --rank-map (its map is of the rebuild) and --object-space (no image neighbours)");
 }
