@@ -518,21 +518,13 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     const double below_limit = options.below_significance * options.below_significance * kBelowDeviation *
                                kBelowDeviation; // × scale², as one product in the same order
     const bool spread_test = estimator_frame_reach(options) > 0 && frame.spread != nullptr;
-    // The per-pixel test's reach in spreads by the spread's number of terms n:
-    // below z·√b(n); above, √(2n) more.
-    std::array<double, 3 * kSpreadFrames + 1> below_reaches{}, above_reaches{};
-    for (int n = 1; spread_test && n <= 3 * kSpreadFrames; ++n) {
-        below_reaches[static_cast<size_t>(n)] = options.below_significance * std::sqrt(spread_bound(n));
-        above_reaches[static_cast<size_t>(n)] = std::sqrt(2.0 * n) + below_reaches[static_cast<size_t>(n)];
+    // The per-pixel test's reach in spreads by the spread's number of terms n
+    // (at most kMostSpreadTerms): below z·√b(n); above, √(2n) more.
+    std::array<double, kMostSpreadTerms + 1> below_reach{}, above_reach{};
+    for (int n = 1; spread_test && n <= kMostSpreadTerms; ++n) {
+        below_reach[static_cast<size_t>(n)] = options.below_significance * std::sqrt(spread_bound(n));
+        above_reach[static_cast<size_t>(n)] = std::sqrt(2.0 * n) + below_reach[static_cast<size_t>(n)];
     }
-    auto below_reach = [&](int n) {
-        return n <= 3 * kSpreadFrames ? below_reaches[static_cast<size_t>(n)]
-                                      : options.below_significance * std::sqrt(spread_bound(n));
-    };
-    auto above_reach = [&](int n) {
-        return n <= 3 * kSpreadFrames ? above_reaches[static_cast<size_t>(n)]
-                                      : std::sqrt(2.0 * n) + below_reach(n);
-    };
     std::vector<double> floor(static_cast<size_t>(channels));
     if (options.non_local) {
         work.biased.assign(static_cast<size_t>(end - row) * width, 0);
@@ -602,9 +594,9 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 // z spreads' upper bound below; above, beyond what a lone bright
                 // sample reaches (√(2n) spreads from its neighbour in time) by
                 // that neighbour's own z.
-                const int terms = static_cast<int>(terms_row[x]);
+                const auto terms = static_cast<size_t>(terms_row[x]);
                 if (terms > 0) {
-                    const double reach = distance < 0 ? below_reach(terms) : above_reach(terms);
+                    const double reach = distance < 0 ? below_reach.at(terms) : above_reach.at(terms);
                     if (distance * distance > reach * reach * spread_row[x])
                         rejected = true, chosen = static_cast<int>(Estimator::Input);
                 }

@@ -18,7 +18,6 @@
 #include <chrono>
 #include <cmath>
 #include <map>
-#include <memory>
 #include <mutex>
 #include <set>
 
@@ -280,7 +279,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     // written are a range, and the frames held are the chunk's and its reach.
     const int reach = estimator_frame_reach(estimators);
     const size_t chunk = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
-    std::map<int, std::unique_ptr<ReadFrame>> held;
+    std::map<int, ReadFrame> held; // its nodes stay put as others come and go
     tbb::enumerable_thread_specific<Buffers> thread_buffers;
     std::mutex counts_mutex;
     for (size_t from = 0; from < written.size(); from += chunk) {
@@ -294,17 +293,19 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             it = needed.count(it->first) ? std::next(it) : held.erase(it);
         std::vector<int> missing;
         for (int g : needed)
-            if (!held.count(g))
-                missing.push_back(g), held.emplace(g, std::make_unique<ReadFrame>());
+            if (!held.count(g)) {
+                missing.push_back(g);
+                held[g]; // made here, filled below in parallel
+            }
         tbb::parallel_for(0, static_cast<int>(missing.size()), [&](int i) {
             throw_if_cancelled();
-            read_frame(missing[static_cast<size_t>(i)], *held.at(missing[static_cast<size_t>(i)]));
+            read_frame(missing[static_cast<size_t>(i)], held.at(missing[static_cast<size_t>(i)]));
         });
         tbb::parallel_for(static_cast<int>(from), static_cast<int>(to), [&](int k) {
             throw_if_cancelled();
             const int t = written[static_cast<size_t>(k)];
             Buffers& buffers = thread_buffers.local();
-            ReadFrame& own = *held.at(t);
+            ReadFrame& own = held.at(t);
             for (std::vector<float>* buffer :
                  {&buffers.unfiltered, &buffers.kept_noise, &buffers.sigma, &buffers.output})
                 buffer->resize(static_cast<size_t>(samples));
@@ -343,7 +344,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                     for (int j = 0; j < static_cast<int>(window.frames.size()); ++j) {
                         const int g = t + j - kSpreadFrames;
                         if (g >= 0 && g < shape.frames && j != kSpreadFrames)
-                            window.frames[static_cast<size_t>(j)] = held.at(g)->cleaned.data();
+                            window.frames[static_cast<size_t>(j)] = held.at(g).cleaned.data();
                     }
                     buffers.judged.resize(static_cast<size_t>(samples));
                     judged_samples(own.raw.data(), own.cleaned.data(), samples, buffers.judged.data());

@@ -12,8 +12,6 @@
 namespace modestack::denoise {
 namespace {
 
-constexpr int kMostTerms = 3 * kSpreadFrames; // the row's 3 pixels × one side's differences
-
 // P(a, x), the regularized lower incomplete gamma function, by its series (the
 // lower tail needed here has x well below a + 1, where it converges fast).
 double lower_gamma_regularized(double a, double x)
@@ -43,16 +41,16 @@ double chi_squared_quantile(int n, double p)
 
 double spread_bound(int terms)
 {
-    static const std::array<double, kMostTerms + 1> bounds = [] {
-        std::array<double, kMostTerms + 1> table{};
-        for (int n = 1; n <= kMostTerms; ++n)
+    static const std::array<double, kMostSpreadTerms + 1> bounds = [] {
+        std::array<double, kMostSpreadTerms + 1> table{};
+        for (int n = 1; n <= kMostSpreadTerms; ++n)
             table[static_cast<size_t>(n)] = n / chi_squared_quantile(n, 1e-3);
         return table;
     }();
     if (terms < 1)
         throw internal_error("spread_bound: no terms");
-    return terms <= kMostTerms ? bounds[static_cast<size_t>(terms)]
-                               : terms / chi_squared_quantile(terms, 1e-3);
+    return terms <= kMostSpreadTerms ? bounds[static_cast<size_t>(terms)]
+                                     : terms / chi_squared_quantile(terms, 1e-3);
 }
 
 void judged_samples(const float* as_read, const float* cleaned, std::int64_t samples, float* judged)

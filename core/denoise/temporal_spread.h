@@ -16,9 +16,9 @@
 // around: at a shadow edge the rows above or below are across it more often
 // (measured in bench/results/estimators.md, section 7).
 //
-// The judged frame's own sample is in every difference of both sides, so a
-// lone bright sample (a firefly) raises the spread with it: its difference d is
-// one of the n terms, d²/2 ≤ n·v̂, and a test of the input above the rebuild
+// The judged frame's own sample is in the nearest difference of each side, so
+// a lone bright sample (a firefly) raises the spread with it: its difference d
+// is one of the n terms, d²/2 ≤ n·v̂, and a test of the input above the rebuild
 // beyond √(2n) spreads (plus the margin for the neighbour's own noise) cannot
 // be passed by such a sample alone.
 //
@@ -38,6 +38,8 @@ namespace modestack::denoise {
 
 /// Frames on each side of a frame whose differences measure its spread.
 inline constexpr int kSpreadFrames = 4;
+/// The most terms spread_rows gives a spread: the row's 3 pixels × one side's differences.
+inline constexpr int kMostSpreadTerms = 3 * kSpreadFrames;
 
 /// One frame's neighbourhood in time. Every plane is laid out [row][x][channel]
 /// from image row `rows_begin` and must hold the rows of a call.
@@ -75,7 +77,7 @@ void spread_rows(const SpreadWindow& window, int row, int end, float* spread, fl
 
 /// n over the 0.001 quantile of χ² with n degrees of freedom: the factor from
 /// a variance estimated by the mean of n squared Gaussian terms to its upper
-/// 99.9 % bound (n ≥ 1; 3·kSpreadFrames at most from spread_rows).
+/// 99.9 % bound (n ≥ 1; kMostSpreadTerms at most from spread_rows).
 double spread_bound(int terms);
 
 } // namespace modestack::denoise
