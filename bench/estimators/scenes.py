@@ -53,30 +53,42 @@ def score(name, x, sigma, ref, noise, noisy_rel, transient, frames_noisy):
     return line
 
 
+class Scoring:
+    """One layer's noisy input and reference, read once, and the score of a
+    sequence against them (--transient FIRST-LAST: its region scored apart)."""
+
+    def __init__(self, noisy, ref_a, ref_b, layer, transient=None):
+        self.noisy = read_shot(noisy, layer)
+        a = read_shot(ref_a, layer)
+        if ref_b != 'none':
+            b = read_shot(ref_b, layer)
+            self.ref = (a + b) / 2
+            self.noise = box((a - b) ** 2 / 4, 1)
+        else:
+            self.ref, self.noise = a, np.zeros_like(a)
+        self.transient = None
+        if transient:
+            first, last = (int(f) for f in transient.split('-'))
+            self.transient = transient_mask(self.ref, first, last)
+        self.noisy_rel = relative((self.noisy - self.ref) ** 2 - self.noise, self.ref)
+        self.frames_noisy = self.noisy_rel.mean((1, 2, 3))
+
+    def line(self, name, x, sigma):
+        return score(name, x, sigma, self.ref, self.noise, self.noisy_rel, self.transient, self.frames_noisy)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('noisy'), parser.add_argument('ref_a'), parser.add_argument('ref_b')
     parser.add_argument('layer'), parser.add_argument('denoised', nargs='+')
     parser.add_argument('--transient', help='FIRST-LAST: frames whose changing pixels are scored apart')
     args = parser.parse_args()
-    noisy = read_shot(args.noisy, args.layer)
-    a = read_shot(args.ref_a, args.layer)
-    if args.ref_b != 'none':
-        b = read_shot(args.ref_b, args.layer)
-        ref = (a + b) / 2
-        noise = box((a - b) ** 2 / 4, 1)
-    else:
-        ref, noise = a, np.zeros_like(a)
-    transient = None
-    if args.transient:
-        first, last = (int(f) for f in args.transient.split('-'))
-        transient = transient_mask(ref, first, last)
-    noisy_rel = relative((noisy - ref) ** 2 - noise, ref)
-    frames_noisy = noisy_rel.mean((1, 2, 3))
+    scoring = Scoring(args.noisy, args.ref_a, args.ref_b, args.layer, args.transient)
+    noisy, ref, noise = scoring.noisy, scoring.ref, scoring.noise
     print(f"  reference noise: {relative(noise, ref).mean():.5f} relMSE "
-          f"({relative(noise, ref).mean() / noisy_rel.mean() * 100:.1f} % of the input's)")
-    print(score('input', noisy, None, ref, noise, noisy_rel, transient, frames_noisy))
-    print(score('gauss 1.5 px', gauss(noisy, 1.5)[0], None, ref, noise, noisy_rel, transient, frames_noisy))
+          f"({relative(noise, ref).mean() / scoring.noisy_rel.mean() * 100:.1f} % of the input's)")
+    print(scoring.line('input', noisy, None))
+    print(scoring.line('gauss 1.5 px', gauss(noisy, 1.5)[0], None))
     for pattern in args.denoised:
         x = read_shot(pattern, args.layer)
         try:
@@ -84,7 +96,7 @@ def main():
         except Exception:  # noqa: BLE001 - a run without sigma is scored without it
             sigma = None
         name = pattern.split('/')[-2]
-        print(score(name, x, sigma, ref, noise, noisy_rel, transient, frames_noisy))
+        print(scoring.line(name, x, sigma))
 
 
 if __name__ == '__main__':

@@ -29,8 +29,8 @@ import sys
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from prototype import box, read_shot, transient_mask  # noqa: E402
-from scenes import relative, score  # noqa: E402
+from prototype import box, read_shot  # noqa: E402
+from scenes import Scoring  # noqa: E402
 
 
 def spread(y, k, pool):
@@ -59,19 +59,8 @@ def main():
                         help='pixels pooled: the 3 of the row (default) or the 3x3 around')
     parser.add_argument('--transient', help='FIRST-LAST: frames whose changing pixels are scored apart')
     args = parser.parse_args()
-    noisy = read_shot(args.noisy, args.layer)
-    a = read_shot(args.ref_a, args.layer)
-    if args.ref_b != 'none':
-        b = read_shot(args.ref_b, args.layer)
-        ref, noise = (a + b) / 2, box((a - b) ** 2 / 4, 1)
-    else:
-        ref, noise = a, np.zeros_like(a)
-    transient = None
-    if args.transient:
-        first, last = (int(f) for f in args.transient.split('-'))
-        transient = transient_mask(ref, first, last)
-    noisy_rel = relative((noisy - ref) ** 2 - noise, ref)
-    frames_noisy = noisy_rel.mean((1, 2, 3))
+    scoring = Scoring(args.noisy, args.ref_a, args.ref_b, args.layer, args.transient)
+    noisy = scoring.noisy
     default = read_shot(args.default, args.layer)
     sigma = read_shot(args.default, args.layer + '.sigma')
     rebuilt = read_shot(args.rebuild, args.layer)
@@ -80,15 +69,14 @@ def main():
     terms = (9 if args.pool == 'square' else 3) * args.frames
     kept = np.all(np.abs(default - rebuilt) < 1e-6, 3)
     distance = (noisy - rebuilt).mean(3)
-    print(score('input', noisy, None, ref, noise, noisy_rel, transient, frames_noisy))
-    print(score('default', default, sigma, ref, noise, noisy_rel, transient, frames_noisy))
+    print(scoring.line('input', noisy, None))
+    print(scoring.line('default', default, sigma))
     for z in args.z:
         limit = np.where(distance < 0, z, np.sqrt(2 * terms) + z)
         taken = kept & (distance ** 2 > limit ** 2 * v)
         out = np.where(taken[..., None], noisy, default)
         out_sigma = np.where(taken[..., None], np.sqrt(v)[..., None], sigma)
-        print(score(f'z {z:g} ({taken.mean() * 100:.2f} % taken)', out, out_sigma, ref, noise, noisy_rel,
-                    transient, frames_noisy))
+        print(scoring.line(f'z {z:g} ({taken.mean() * 100:.2f} % taken)', out, out_sigma))
 
 
 if __name__ == '__main__':
