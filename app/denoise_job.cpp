@@ -331,6 +331,36 @@ DenoiseJob make_denoise_job(const DenoiseCommandOptions& options, const CLI::App
 
 namespace {
 
+// One warning per layer whose noise repeats from frame to frame
+// (core/denoise/repeating_noise.h): the temporal rebuild cannot remove it, and
+// a farm that renders with a fixed seed should hear so from the run itself.
+void warn_of_repeating_noise(const denoise::Report& report, const io::SequenceReader& reader,
+                             const DenoiseJob& job, bool spatial, Progress& progress)
+{
+    std::vector<std::pair<std::string, const denoise::RepeatingNoise*>> found;
+    const std::vector<io::SelectedLayer>& layers = reader.layers();
+    if (report.layers.size() == layers.size() && layers.size() > 1) {
+        for (size_t i = 0; i < layers.size(); ++i)
+            found.emplace_back(layers[i].name, &report.layers[i].repeating_noise);
+    } else {
+        std::string names;
+        for (const io::SelectedLayer& layer : layers)
+            names += (names.empty() ? "" : ", ") + layer.name;
+        found.emplace_back(names, &report.repeating_noise);
+    }
+    for (const auto& [name, noise] : found)
+        if (noise->repeats)
+            progress.warn(fmt::format("{}: the noise of {} repeats from frame to frame ({:.0f} % of its "
+                                      "pixel-scale variation stays "
+                                      "put): the temporal rebuild cannot remove it{}; render with a seed "
+                                      "that changes per frame for "
+                                      "the full gain",
+                                      job.input, name, 100 * noise->share,
+                                      spatial
+                                          ? ", so the spatial estimators take over where they measure better"
+                                          : " (--estimators without spatial leaves it in)"));
+}
+
 DenoiseResult denoise_in_arena(const DenoiseJob& job, const CommonOptions& context_options)
 {
     auto start = std::chrono::steady_clock::now();
@@ -472,6 +502,7 @@ DenoiseResult denoise_in_arena(const DenoiseJob& job, const CommonOptions& conte
     if (report.outliers.non_finite > 0)
         context.progress().warn(fmt::format("{} NaN/Inf values in {} were replaced by their pixel's temporal median",
                                             report.outliers.non_finite, job.input));
+    warn_of_repeating_noise(report, reader, job, settings.estimators.spatial, context.progress());
     result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (!job.save_modes.empty()) {
         nlohmann::ordered_json modes;

@@ -374,6 +374,11 @@ std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::Solve
     header["gram"] = {{"rows", state.rows}, {"tiles", state.tiles}};
     header["outliers"] = outliers_json(solved.outliers);
     header["frame_noise_factors"] = solved.frame_noise_factors;
+    const denoise::RepeatingNoise& repeating = solved.repeating;
+    header["repeating_noise"] = {{"measured", repeating.measured}, {"temporal", repeating.temporal},
+                                 {"spatial", repeating.spatial},   {"coarse", repeating.coarse},
+                                 {"share", repeating.share},       {"whiteness", repeating.whiteness},
+                                 {"repeats", repeating.repeats},   {"frames", repeating.frames}};
     Payload payload;
     payload.add_gram(solved.gram);
     return stage_bytes(header, payload);
@@ -396,6 +401,15 @@ denoise::SolvedSums read_solve(const StageBytes& solve, const ShotFingerprint& f
         solved.frame_noise_factors = file.header.at("frame_noise_factors").get<std::vector<double>>();
         if (solved.frame_noise_factors.size() != static_cast<size_t>(frames))
             throw bad_input(path, "damaged solve file: its sizes do not agree");
+        const nlohmann::json& repeating = file.header.at("repeating_noise");
+        solved.repeating.measured = repeating.at("measured").get<bool>();
+        solved.repeating.temporal = repeating.at("temporal").get<double>();
+        solved.repeating.spatial = repeating.at("spatial").get<double>();
+        solved.repeating.coarse = repeating.at("coarse").get<double>();
+        solved.repeating.share = repeating.at("share").get<double>();
+        solved.repeating.whiteness = repeating.at("whiteness").get<double>();
+        solved.repeating.repeats = repeating.at("repeats").get<bool>();
+        solved.repeating.frames = repeating.at("frames").get<std::vector<int>>();
         return solved;
     } catch (const nlohmann::json::exception& error) {
         throw bad_input(path, fmt::format("damaged stage file header: {}", error.what()));

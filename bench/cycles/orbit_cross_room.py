@@ -48,6 +48,8 @@ def parse_args():
     parser.add_argument('--frames', default=f'1-{SHOT_FRAMES}', help='FIRST-LAST')
     parser.add_argument('--res', default='128x96', help='WIDTHxHEIGHT')
     parser.add_argument('--out', required=True, help='output directory')
+    parser.add_argument('--fixed-seed', action='store_true',
+                        help='the same random numbers in every frame (Cycles\' default: animated seed off)')
     parser.add_argument('--without-crosser', action='store_true',
                         help='hide the crossing sphere in every frame (to find its region and shadow)')
     args = parser.parse_args(argv)
@@ -190,7 +192,7 @@ def configure_render(args):
     cycles.use_adaptive_sampling = False
     cycles.use_denoising = False
     cycles.seed = args.seed
-    cycles.use_animated_seed = True
+    cycles.use_animated_seed = not args.fixed_seed
     cycles.sample_clamp_direct = 0.0
     cycles.sample_clamp_indirect = 0.0
     cycles.blur_glossy = 0.0
@@ -244,7 +246,8 @@ def main():
     bpy.ops.render.render(animation=True)
     total = time.time() - begin
     with open(os.path.join(args.out, 'timing.json'), 'w') as f:
-        json.dump({'spp': args.spp, 'seed': args.seed, 'res': args.res, 'frames': args.frames,
+        json.dump({'spp': args.spp, 'seed': args.seed, 'fixed_seed': args.fixed_seed, 'res': args.res,
+                   'frames': args.frames,
                    'per_frame_s': {str(k): round(v, 3) for k, v in sorted(times.items())},
                    'total_render_call_s': round(total, 2)}, f, indent=1)
     print(f'orbit_cross_room: {len(times)} frames, {total:.1f} s')

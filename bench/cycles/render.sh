@@ -3,10 +3,12 @@
 # 48 frames at 128x96, noisy (4 spp, seed 1) and two references with other seeds
 # (512 spp, seeds 7 and 8) so that scoring can count the reference's own noise,
 # and `without`: frames 20-29 at 512 spp (seed 9) without the crossing sphere, to
-# find the pixels of the sphere and its shadow (bench/cycles/per_frame.py).
+# find the pixels of the sphere and its shadow (bench/cycles/per_frame.py), and
+# `noisy_fixed`: the noisy pass with Cycles' default fixed seed (the same random
+# numbers in every frame: noise that repeats, docs/design.md).
 #
 #   bench/cycles/render.sh OUTDIR
-# Writes OUTDIR/{noisy,ref_a,ref_b,without}/frame.####.exr, a timing.json in each, and
+# Writes OUTDIR/{noisy,ref_a,ref_b,without,noisy_fixed}/frame.####.exr, a timing.json in each, and
 # OUTDIR/render.log (one line per variant: wall and CPU seconds, load average).
 # Environment: FRAMES (1-48), RES (128x96), REF_SPP (512). A variant that holds
 # a "done" file is kept. ~22 min wall on the 2-core machine of 2026-12-05 (shared
@@ -49,4 +51,5 @@ variant noisy 4 1 "$frames"
 variant ref_a "$ref_spp" 7 "$frames"
 variant ref_b "$ref_spp" 8 "$frames"
 variant without "$ref_spp" 9 20-29 --without-crosser
+variant noisy_fixed 4 1 "$frames" --fixed-seed
 cat "$log"

@@ -49,8 +49,10 @@ Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& setting
         return merge_layer_reports(run_layers(source, sink, settings, progress), shape);
     const PassContext context{source, sink, settings, progress};
     check_settings(settings, shape);
-    const RunPlan plan = plan_run(context, true);
+    RunPlan plan = plan_run(context, true);
+    look_for_repeating_noise(context, plan);
     Report report;
+    report.repeating_noise = plan.repeating;
     report.shape = shape;
     report.plan = plan.bands;
     report.solver = solver_name(plan.solver);

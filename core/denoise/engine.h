@@ -22,6 +22,7 @@
 #include "core/denoise/mode_filter.h"
 #include "core/denoise/non_negative.h"
 #include "core/denoise/rank_map.h"
+#include "core/denoise/repeating_noise.h"
 #include "core/denoise/weight_smoothing.h"
 #include "core/lowrank/outliers.h"
 #include "core/lowrank/randomized_svd.h"
@@ -119,6 +120,8 @@ struct Report {
     std::vector<ChoiceCounts> estimator_choice;
     /// --estimators: per frame, its noise level over the shot's (frame_noise.h; empty: no choice made).
     std::vector<double> frame_noise_factors;
+    /// The noise found to repeat from frame to frame (unmeasured: a farm task that writes no frame).
+    RepeatingNoise repeating_noise;
     double seconds_filter_survey = 0;     ///< the mode filter's SURE pass
     double seconds_statistics = 0;        ///< pass 1 (read + clean + Gram)
     double seconds_solve = 0;             ///< eigensolve or randomized SVD, and the rank rule

@@ -273,6 +273,7 @@ int clipped_window(int width, int height, int x, int y, int radius)
 // pages would cost the kernel's zeroing every time).
 struct Workspace {
     Plane residual, high_pass, variance, below, below_mean, noise_scale, noise_scale_mean;
+    Plane input_rows, input_high_pass, input_power, repeating, total_variance; // noise that repeats
     std::array<Plane, 2> blurred;
     std::array<Plane, kEstimators> sure, sure_squared, difference, difference_squared;
     std::array<Plane, kEstimators> sure_mean, sure_square_mean, difference_mean, difference_square_mean,
@@ -356,6 +357,49 @@ void replace_by_non_local(const ChoiceFrame& frame, const Plane& variance, int r
         }
 }
 
+// The squared 4-neighbour high-pass of `source` over rows [pass_begin,
+// pass_end), over 1 + 1/k for k neighbours (the noise variance, for white
+// noise); `source` holds one row more on each side (clipped to the image).
+MODESTACK_AVX2_CLONES void squared_high_pass(const Plane& source, int height, int pass_begin, int pass_end,
+                                             Plane& high_pass)
+{
+    const int width = source.width, channels = source.depth;
+    const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
+    high_pass.reset(pass_begin, pass_end, width, channels);
+    for (int y = pass_begin; y < pass_end; ++y) {
+        const float* here = source.row(y);
+        const float* above = y > 0 ? source.row(y - 1) : nullptr;
+        const float* below = y + 1 < height ? source.row(y + 1) : nullptr;
+        float* out = high_pass.row(y);
+        if (above && below) // the pixels with all four neighbours, in a loop that vectorises
+            for (std::int64_t i = channels; i < row_samples - channels; ++i) {
+                const double neighbours =
+                    static_cast<double>(here[i - channels]) + here[i + channels] + above[i] + below[i];
+                const double d = here[i] - neighbours / 4;
+                out[i] = static_cast<float>(d * d / 1.25);
+            }
+        for (int x = 0; x < width; ++x) {
+            if (above && below && x == 1 && width > 2)
+                x = width - 1;
+            for (int c = 0; c < channels; ++c) {
+                const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
+                double neighbours = 0;
+                int count = 0;
+                if (x > 0)
+                    neighbours += here[i - channels], ++count;
+                if (x + 1 < width)
+                    neighbours += here[i + channels], ++count;
+                if (above)
+                    neighbours += above[i], ++count;
+                if (below)
+                    neighbours += below[i], ++count;
+                const double d = count ? here[i] - neighbours / count : 0.0;
+                out[i] = count ? static_cast<float>(d * d / (1.0 + 1.0 / count)) : 0.0f;
+            }
+        }
+    }
+}
+
 // choose_estimators for rows [row, end), one strip.
 MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options, const ChoiceFrame& frame,
                                                 int row, int end, float* values, float* sigma,
@@ -385,42 +429,33 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
         for (std::int64_t i = 0; i < row_samples; ++i)
             out[i] = input[i] - rebuilt[i];
     }
-    Plane& high_pass = work.high_pass;
-    high_pass.reset(pass_begin, pass_end, width, channels);
-    for (int y = pass_begin; y < pass_end; ++y) {
-        const float* here = residual.row(y);
-        const float* above = y > 0 ? residual.row(y - 1) : nullptr;
-        const float* below = y + 1 < height ? residual.row(y + 1) : nullptr;
-        float* out = high_pass.row(y);
-        if (above && below) // the pixels with all four neighbours, in a loop that vectorises
-            for (std::int64_t i = channels; i < row_samples - channels; ++i) {
-                const double neighbours =
-                    static_cast<double>(here[i - channels]) + here[i + channels] + above[i] + below[i];
-                const double d = here[i] - neighbours / 4;
-                out[i] = static_cast<float>(d * d / 1.25);
-            }
-        for (int x = 0; x < width; ++x) {
-            if (above && below && x == 1 && width > 2)
-                x = width - 1;
-            for (int c = 0; c < channels; ++c) {
-                const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
-                double neighbours = 0;
-                int count = 0;
-                if (x > 0)
-                    neighbours += here[i - channels], ++count;
-                if (x + 1 < width)
-                    neighbours += here[i + channels], ++count;
-                if (above)
-                    neighbours += above[i], ++count;
-                if (below)
-                    neighbours += below[i], ++count;
-                const double d = count ? here[i] - neighbours / count : 0.0;
-                out[i] = count ? static_cast<float>(d * d / (1.0 + 1.0 / count)) : 0.0f;
-            }
-        }
-    }
+    squared_high_pass(residual, height, pass_begin, pass_end, work.high_pass);
+    const Plane& high_pass = work.high_pass;
     Plane& variance = work.variance;
     box_mean(high_pass, height, radius, window_begin, window_end, variance, work.scratch, work.column);
+    // Noise that repeats from frame to frame: the rebuild keeps it and the
+    // residual does not show it. Its variance per sample is the share that
+    // repeats times the windowed power of the input's own high-pass (the same
+    // window and high-pass as v); every candidate's noise is v plus that.
+    const bool repeating = frame.repeating_share > 0;
+    const Plane& total = repeating ? work.total_variance : variance;
+    if (repeating) {
+        Plane& rows = work.input_rows;
+        rows.reset(residual_begin, residual_end, width, channels);
+        for (int y = residual_begin; y < residual_end; ++y)
+            std::copy(input_at(y), input_at(y) + row_samples, rows.row(y));
+        squared_high_pass(rows, height, pass_begin, pass_end, work.input_high_pass);
+        box_mean(work.input_high_pass, height, radius, window_begin, window_end, work.input_power,
+                 work.scratch, work.column);
+        work.repeating.reset(window_begin, window_end, width, channels);
+        work.total_variance.reset(window_begin, window_end, width, channels);
+        for (int y = window_begin; y < window_end; ++y)
+            for (std::int64_t i = 0; i < row_samples; ++i) {
+                const float part = static_cast<float>(frame.repeating_share * work.input_power.row(y)[i]);
+                work.repeating.row(y)[i] = part;
+                work.total_variance.row(y)[i] = variance.row(y)[i] + part;
+            }
+    }
 
     // Each candidate's value and per-pixel SURE (channel mean) over the window rows.
     std::array<bool, kEstimators> used{true, options.input, options.spatial, options.spatial};
@@ -447,9 +482,15 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             std::array<double, kEstimators> pixel_sure{};
             for (int c = 0; c < channels; ++c) {
                 const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
-                const double input = input_at(y)[i], v = variance.row(y)[i];
+                const double input = input_at(y)[i], v = total.row(y)[i];
                 const double rebuilt = rebuilt_at(y)[i];
-                pixel_sure[0] += sample_sure(rebuilt, input, v, kept_at(y, i));
+                if (repeating) { // the rebuild keeps the repeating part whole: its slope there is 1
+                    const double part = work.repeating.row(y)[i];
+                    pixel_sure[0] +=
+                        (rebuilt - input) * (rebuilt - input) - v + 2 * (v - part) * kept_at(y, i) + 2 * part;
+                } else {
+                    pixel_sure[0] += sample_sure(rebuilt, input, v, kept_at(y, i));
+                }
                 pixel_sure[1] += v;
                 for (int g = 0; g < 2 && options.spatial; ++g) {
                     const double blur = blurred[g].row(y)[i];
@@ -541,7 +582,8 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                     gain_square_mean[k] = difference_square_mean[k].row(y),
                     near_sure[k] = local_sure[k].row(y);
             }
-        const float *pooled_sure = sure_mean[0].row(y), *variance_row = variance.row(y);
+        const float *pooled_sure = sure_mean[0].row(y), *variance_row = total.row(y);
+        const float* repeating_row = repeating ? work.repeating.row(y) : nullptr;
         const float* engine_sigma = frame.sigma + (y - frame.rebuilt_begin) * row_samples;
         const float* below_row = below_test ? work.below_mean.row(y) : nullptr;
         const float* scale_row = below_test ? work.noise_scale_mean.row(y) : nullptr;
@@ -594,10 +636,17 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 // z spreads' upper bound below; above, beyond what a lone bright
                 // sample reaches (√(2n) spreads from its neighbour in time) by
                 // that neighbour's own z.
+                // Noise that repeats is not in the spread: z of its part is added.
+                double repeating_limit = 0;
+                if (repeating) {
+                    for (int c = 0; c < channels; ++c)
+                        repeating_limit += repeating_row[static_cast<std::int64_t>(x) * channels + c];
+                    repeating_limit *= per_channel * options.below_significance * options.below_significance;
+                }
                 const auto terms = static_cast<size_t>(terms_row[x]);
                 if (terms > 0) {
                     const double reach = distance < 0 ? below_reach.at(terms) : above_reach.at(terms);
-                    if (distance * distance > reach * reach * spread_row[x])
+                    if (distance * distance > reach * reach * spread_row[x] + repeating_limit)
                         rejected = true, chosen = static_cast<int>(Estimator::Input);
                 }
             }
@@ -611,7 +660,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
                 const double v = variance_row[i];
                 const double engine = engine_sigma[i];
-                floor[c] = chosen == 0   ? engine * engine
+                floor[c] = chosen == 0   ? engine * engine + (repeating ? repeating_row[i] : 0.0)
                            : chosen == 1 ? v
                                          : v * kernel_x[chosen - 2].squares[x] * kernel_y_squares[chosen - 2];
                 floor_sum += floor[c];
@@ -646,7 +695,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
         }
     }
     if (options.non_local)
-        replace_by_non_local(frame, variance, row, end, values, chosen_of_pixel, counts, work);
+        replace_by_non_local(frame, total, row, end, values, chosen_of_pixel, counts, work);
     // The roots in one loop that vectorises (one at a time they were a tenth of the choice).
     const std::int64_t samples = (end - row) * row_samples;
     for (std::int64_t i = 0; i < samples; ++i)

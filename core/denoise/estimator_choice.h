@@ -124,6 +124,11 @@ struct ChoiceFrame {
     /// This frame's noise level over the shot's (frame_noise.h): the
     /// one-sided test takes noise_scale times this.
     double noise_factor = 1;
+    /// The share of the input's noise that repeats from frame to frame
+    /// (repeating_noise.h; 0: none counted). The rebuild keeps that part whole
+    /// and the residual's v cannot see it: the choice adds share × the windowed
+    /// power of the input's own high-pass to every candidate's noise variance.
+    double repeating_share = 0;
     /// Per pixel of rows from spread_begin (covering the rows chosen): the
     /// input's spread around this frame and its number of terms
     /// (temporal_spread.h). Null, or no input among the estimators: no

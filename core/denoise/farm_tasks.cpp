@@ -121,6 +121,9 @@ TaskResult<SolvedSums> solve_task(const PassContext& context, const Statistics& 
     result.output.gram = BlockGram::merge(shot.blocks, result.report.shape.frames);
     result.output.outliers = shot.outliers;
     result.output.frame_noise_factors = frame_noise_factors(shot.roughness, result.report.shape.frames);
+    // Once for the shot, here rather than in every write task (which then reads only its frames' reach).
+    result.output.repeating = result.report.repeating_noise =
+        measure_repeating_noise(context.source, context.progress);
     const Solution solution = solution_from_gram(context.settings, result.output.gram);
     result.report.outliers = shot.outliers;
     result.report.rank_decision = solution.rank_decision;
@@ -220,7 +223,8 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                   const std::vector<ModeImages>& bands)
 {
     Report report;
-    const RunPlan plan = plan_task(context, Stage::Write, report);
+    RunPlan plan = plan_task(context, Stage::Write, report);
+    plan.repeating = report.repeating_noise = solved.repeating;
     const ShotShape& shape = report.shape;
     const Solved modes_of = solved_from(context, plan, solved, survey, report);
     const Settings& settings = context.settings;
@@ -338,6 +342,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                 frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr;
                 frame.noise_scale = noise_scale.data();
                 frame.noise_factor = solved.frame_noise_factors.at(static_cast<size_t>(t));
+                frame.repeating_share = plan.repeating.counted_share();
                 if (reach > 0) { // the per-pixel test's spread, as a whole run makes it
                     SpreadWindow window;
                     window.image = image, window.rows_begin = 0;

@@ -85,8 +85,16 @@ std::vector<Report> run_layers(FrameSource& source, FrameSink& sink, const Setti
     }
     // One band plan for all: the layers read the same rows in turn. Beside each
     // layer's own rows it counts the shared rows of a band and the gathered write.
-    for (auto& layer : layers)
-        layer->plan.emplace(plan_run(layer->context, true));
+    // Noise that repeats, each layer's from one read of the frames it takes.
+    std::vector<ChannelGroup> groups;
+    for (const ChannelRange& range : ranges)
+        groups.push_back({range.first, range.count});
+    const std::vector<RepeatingNoise> repeating = measure_repeating_noise(source, groups, progress);
+    for (size_t i = 0; i < layers.size(); ++i) {
+        Layer& layer = *layers[i];
+        layer.plan.emplace(plan_run(layer.context, true));
+        layer.plan->repeating = layer.report.repeating_noise = repeating[i];
+    }
     PassNeeds needs = pass_needs(settings, shape, layers.front()->plan->filter, source.band_bytes_per_row());
     needs.shared_rows = true;
     needs.shared_frames = kSharedFrames;

@@ -201,6 +201,8 @@ Report merge_reports(const std::vector<Report>& reports)
                                        part.estimator_choice.end());
         merged.frame_noise_factors.insert(merged.frame_noise_factors.end(), part.frame_noise_factors.begin(),
                                           part.frame_noise_factors.end()); // each over its own segment
+        if (part.repeating_noise.repeats && !merged.repeating_noise.repeats)
+            merged.repeating_noise = part.repeating_noise; // said of the shot when any part has it
         merged.seconds_filter_survey += part.seconds_filter_survey;
         merged.seconds_statistics += part.seconds_statistics;
         merged.seconds_solve += part.seconds_solve;

@@ -12,6 +12,7 @@ target_sources(modestack_core PRIVATE
 target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/non_negative.cpp
   ${CMAKE_CURRENT_LIST_DIR}/rank_map.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/repeating_noise.cpp
   ${CMAKE_CURRENT_LIST_DIR}/segments.cpp
   ${CMAKE_CURRENT_LIST_DIR}/stage_modes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/stage_task.cpp

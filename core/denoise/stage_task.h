@@ -21,6 +21,7 @@
 // io/stage_files.h moves them between machines as files.
 #pragma once
 
+#include "core/denoise/repeating_noise.h"
 #include "core/lowrank/gram.h"
 #include "core/lowrank/outliers.h"
 
@@ -89,6 +90,7 @@ struct SolvedSums {
     lowrank::GramAccumulator gram{1};
     lowrank::OutlierCounts outliers;
     std::vector<double> frame_noise_factors; ///< per frame (frame_noise.h)
+    RepeatingNoise repeating;                ///< measured by the solve task (repeating_noise.h)
 };
 
 /// A survey task's result: the mode filter's survey sums of image rows

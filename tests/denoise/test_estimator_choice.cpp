@@ -292,6 +292,7 @@ struct WallFrame {
     int width = 64, height = 48, channels = 3;
     std::vector<float> input, rebuilt, sigma, noise_scale;
     double noise_factor = 1;
+    double repeating_share = 0; // of the noise, repeating from frame to frame (repeating_noise.h)
     std::vector<float> spread, spread_terms; // the per-pixel test's, when set
     WallFrame(float noise, unsigned seed, float shot_noise = 0)
     {
@@ -319,6 +320,7 @@ struct WallFrame {
         frame.rebuilt = rebuilt.data(), frame.sigma = sigma.data(), frame.leverage = 0.05;
         frame.noise_scale = with_noise_scale ? noise_scale.data() : nullptr;
         frame.noise_factor = noise_factor;
+        frame.repeating_share = repeating_share;
         frame.rebuilt_begin = 0, frame.rebuilt_end = height;
         if (!spread.empty())
             frame.spread = spread.data(), frame.spread_terms = spread_terms.data(), frame.spread_begin = 0;
@@ -411,6 +413,45 @@ TEST_CASE("estimators: non-local means only replaces a candidate where the rebui
     CAPTURE(edge_with);
     CHECK(replaced_with < 0.8 * replaced_without);
     CHECK(edge_with < edge_without); // the shadow's edge columns
+}
+
+TEST_CASE("estimators: noise that repeats, which the rebuild keeps whole, is counted and blurred away, and "
+          "sigma says how much is left")
+{
+    // The rebuild kept the frame's noise whole (it is the same in every frame), so
+    // the residual shows none of it: counted as noise only through the share.
+    WallFrame wall(0.05f, 7);
+    wall.rebuilt = wall.input;
+    auto mean_square = [&](const std::vector<float>& values) {
+        double sum = 0;
+        for (float value : values)
+            sum += (value - 0.5) * (value - 0.5);
+        return sum / static_cast<double>(values.size());
+    };
+    std::vector<float> blind, blind_sigma;
+    const auto blind_choice = wall.choose(true, &blind, "rebuild,input,spatial", &blind_sigma);
+    CHECK(std::count(blind_choice.begin(), blind_choice.end(), 0) == std::ptrdiff_t(blind_choice.size()));
+    CHECK(blind == wall.input);
+    const double input_error = mean_square(wall.input);
+
+    wall.repeating_share = 1;
+    std::vector<float> counted, counted_sigma;
+    const auto choice = wall.choose(true, &counted, "rebuild,input,spatial", &counted_sigma);
+    const auto rebuilt = std::count(choice.begin(), choice.end(), 0);
+    MESSAGE("rebuild kept at " << rebuilt << " of " << choice.size() << " pixels");
+    CHECK(rebuilt < std::ptrdiff_t(choice.size() / 10));
+    const double error = mean_square(counted);
+    MESSAGE("mean square error: input " << input_error << ", counted " << error);
+    CHECK(error < 0.2 * input_error);
+    double sigma_square = 0;
+    for (float value : counted_sigma)
+        sigma_square += double(value) * value;
+    sigma_square /= static_cast<double>(counted_sigma.size());
+    MESSAGE("RMS sigma / RMS error " << std::sqrt(sigma_square / error));
+    CHECK(sigma_square > 0.5 * 0.5 * error);
+    CHECK(sigma_square < 2.0 * 2.0 * error);
+    // Blind, sigma was the rebuild's 0.2 of the noise: 5x too small.
+    CHECK(blind_sigma.front() == doctest::Approx(0.01));
 }
 
 TEST_CASE("estimators: on pure noise around an unbiased rebuild the one-sided test never fires")

@@ -236,7 +236,7 @@ TEST_CASE("stages: a statistics task must cover whole blocks of rows, a modes ta
     Statistics last;
     CHECK_NOTHROW(last = statistics_task(context_of(shot, sink, settings), 128, 150).output);
     CHECK(last.blocks.size() == 1);
-    const SolvedSums empty{lowrank::GramAccumulator(shot.size.frames), {}, {}};
+    const SolvedSums empty{lowrank::GramAccumulator(shot.size.frames), {}, {}, {}};
     CHECK_THROWS_WITH_AS(modes_task(context_of(shot, sink, settings), empty, {}, 100, 151),
                          doctest::Contains("rows 0-149"), Error);
     settings.non_negative = NonNegativeMode::KeepSum;

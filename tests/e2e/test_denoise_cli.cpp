@@ -8,6 +8,7 @@
 #include <doctest/doctest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <random>
@@ -156,6 +157,62 @@ TEST_CASE("denoise removes most of the noise, writes sigma, keeps other channels
                                        dir.file("in.####.exr") + " -o " + dir.file("first/den.####.exr") + " -q");
     REQUIRE_MESSAGE(options_first.exit_code == 0, options_first.err);
     CHECK(testkit::read_channels(dir.file("first/den.0001.exr"), kDiffInd) == testkit::read_channels(first, kDiffInd));
+}
+
+TEST_CASE("denoise on noise that repeats from frame to frame says so, and its spatial estimators take most "
+          "of it out")
+{
+    // The same noise in every frame, as a renderer with a fixed seed gives it.
+    auto repeating_value = [](int frame, int x, int y, int c) {
+        if (c >= 4 && c <= 6)
+            return clean_value(frame, x, y, c - 4) + noise(1, x, y, c - 4);
+        return noisy_value(frame, x, y, c);
+    };
+    TempDir dir;
+    testkit::write_sequence(dir.file("in.%04d.exr"), all_frames(), layout(), repeating_value);
+    auto result = run_modestack("denoise " + dir.file("in.####.exr") + " -o " + dir.file("out/den.####.exr") +
+                                " --layer DiffInd --json " + dir.file("summary.json") + " -q");
+    REQUIRE_MESSAGE(result.exit_code == 0, result.err);
+    // One warning line naming the input and the layer, even with -q.
+    CHECK(result.err.find("warning: " + dir.file("in.####.exr") +
+                          ": the noise of ViewLayer.DiffInd repeats from "
+                          "frame to frame") != std::string::npos);
+    CHECK(std::count(result.err.begin(), result.err.end(), '\n') == 1);
+    auto json = nlohmann::json::parse(read_text(dir.file("summary.json")));
+    const auto& repeating = json["layers"][0]["repeating_noise"];
+    CHECK(repeating["repeats"] == true);
+    CHECK(repeating["share"].get<double>() > 0.9);
+    CHECK(repeating["whiteness"].get<double>() > 0.8);
+    CHECK(repeating["frames_read"] == 6);
+    // The temporal rebuild alone keeps it; the choice, counting it, removes most of it.
+    auto rebuild =
+        run_modestack("denoise " + dir.file("in.####.exr") + " -o " + dir.file("rebuild/den.####.exr") +
+                      " --layer DiffInd --estimators rebuild -q");
+    REQUIRE_MESSAGE(rebuild.exit_code == 0, rebuild.err);
+    CHECK(rebuild.err.find("(--estimators without spatial leaves it in)") != std::string::npos);
+    const double noisy = mse_against_clean(dir.file("in.%04d.exr"), kFrames);
+    const double kept = mse_against_clean(dir.file("rebuild/den.%04d.exr"), kFrames);
+    const double chosen = mse_against_clean(dir.file("out/den.%04d.exr"), kFrames);
+    MESSAGE("MSE noisy " << noisy << ", rebuild alone " << kept << ", default " << chosen);
+    CHECK(kept > 0.5 * noisy);
+    CHECK(chosen < 0.35 * noisy);
+    // And sigma says about how large the error is (the rebuild's sigma alone does not see it).
+    auto [rms_error, rms_sigma] = rms_error_and_sigma(dir.file("out/den.%04d.exr"), kFrames);
+    MESSAGE("RMS error " << rms_error << ", RMS sigma " << rms_sigma);
+    CHECK(rms_sigma > 0.5 * rms_error);
+    CHECK(rms_sigma < 2.0 * rms_error);
+
+    // Noise new in every frame: no warning, nothing counted, the bits of a run that never looked.
+    TempDir fresh;
+    testkit::write_sequence(fresh.file("in.%04d.exr"), all_frames(), layout(), noisy_value);
+    auto plain =
+        run_modestack("denoise " + fresh.file("in.####.exr") + " -o " + fresh.file("out/den.####.exr") +
+                      " --layer DiffInd --json " + fresh.file("summary.json") + " -q");
+    REQUIRE_MESSAGE(plain.exit_code == 0, plain.err);
+    CHECK(plain.err.find("repeats") == std::string::npos);
+    auto plain_json = nlohmann::json::parse(read_text(fresh.file("summary.json")));
+    CHECK(plain_json["layers"][0]["repeating_noise"]["repeats"] == false);
+    CHECK(plain_json["layers"][0]["repeating_noise"]["share"].get<double>() < 0.3);
 }
 
 TEST_CASE("denoise --no-mode-filter: press picks the true rank 2 and sigma matches a rank-2 rebuild's noise")

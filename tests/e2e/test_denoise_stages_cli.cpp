@@ -36,17 +36,23 @@ testkit::ExrLayout layout()
 }
 
 // DiffInd: a rank-2 signal with noise and a firefly; Combined: other data.
-float noisy_value(int frame, int x, int y, int c)
+// `repeat`: the same noise in every frame (a fixed seed).
+float noisy_value(int frame, int x, int y, int c, bool repeat)
 {
     if (c < 3)
         return 0.01f * x + 0.02f * y + frame;
-    std::mt19937 generator(static_cast<unsigned>(((frame * 131 + x) * 977 + y) * 7 + c));
+    std::mt19937 generator(static_cast<unsigned>((((repeat ? 1 : frame) * 131 + x) * 977 + y) * 7 + c));
     std::normal_distribution<float> normal(0.0f, 0.15f);
     const float t = static_cast<float>(frame) / kFrames;
     float value = 0.6f + 0.3f * std::sin(0.2f * x + c) * std::cos(0.05f * y) * (1 + t) + 0.3f * (x > 16) * t * t;
     if (frame == 4 && x == 3 && y == 100)
         value += 200.0f;
     return value + normal(generator);
+}
+
+float fresh_noise(int frame, int x, int y, int c)
+{
+    return noisy_value(frame, x, y, c, false);
 }
 
 std::vector<int> frames(int first, int last)
@@ -80,12 +86,18 @@ TEST_CASE("denoise --stage: stats, solve, survey, modes and write tasks give the
           "reading only its frames and their reach")
 {
     TempDir dir;
-    testkit::write_sequence(dir.file("in.%04d.exr"), frames(1, kFrames), layout(), noisy_value);
-    const std::string in = "denoise " + dir.file("in.####.exr") + " --layer DiffInd -q ";
-    for (const std::string method : {"", "--no-mode-filter --rank 2 "}) {
+    testkit::write_sequence(dir.file("in.%04d.exr"), frames(1, kFrames), layout(), fresh_noise);
+    // Noise that repeats: the solve task measures it once and hands the share the choice counts to the
+    // writes.
+    testkit::write_sequence(dir.file("rep.%04d.exr"), frames(1, kFrames), layout(),
+                            [](int frame, int x, int y, int c) { return noisy_value(frame, x, y, c, true); });
+    for (const auto& [method, input] :
+         {std::pair<std::string, std::string>{"", "in"}, {"--no-mode-filter --rank 2 ", "in"}, {"", "rep"}}) {
         CAPTURE(method);
+        CAPTURE(input);
+        const std::string in = "denoise " + dir.file(input + ".####.exr") + " --layer DiffInd -q ";
         TempDir job;
-        run_ok(in + method + "-o " + job.file("one/d.####.exr"));
+        run_ok(in + method + "-o " + job.file("one/d.####.exr") + " --json " + job.file("one.json"));
         // Two statistics tasks by share, one by rows; the solve task gets them in any order.
         run_ok(in + method + "--stage stats --rows 1/2 -o " + job.file("s1.stats"));
         run_ok(in + method + "--stage stats --rows 64-127 -o " + job.file("s2.stats"));
@@ -110,9 +122,10 @@ TEST_CASE("denoise --stage: stats, solve, survey, modes and write tasks give the
         const std::string partial = job.file("partial");
         std::filesystem::create_directories(partial);
         for (int frame = 1; frame <= kFrames; ++frame) {
-            char name[32];
-            std::snprintf(name, sizeof name, "/in.%04d.exr", frame);
-            std::filesystem::copy_file(dir.file("") + name, partial + name);
+            char number[16];
+            std::snprintf(number, sizeof number, ".%04d.exr", frame);
+            const std::string name = "/" + input + number;
+            std::filesystem::copy_file(dir.file(input) + number, partial + name);
             if (frame > 1 && frame < kFrames)
                 continue;
             const auto size = std::filesystem::file_size(partial + name);
@@ -120,11 +133,10 @@ TEST_CASE("denoise --stage: stats, solve, survey, modes and write tasks give the
             file.seekp(static_cast<std::streamoff>(size / 2));
             file << std::string(size - size / 2, '\x5a');  // the pixel chunks at the end, same size
         }
-        const std::string write_partial = "denoise " + partial + "/in.####.exr --layer DiffInd -q " + method +
-                                          "--stage write --solve " + job.file("shot.solve") + " " + surveys +
-                                          "--modes " +
-                                          job.file("m1.modes") + " " + job.file("m2.modes") + " " +
-                                          job.file("m3.modes");
+        const std::string write_partial =
+            "denoise " + partial + "/" + input + ".####.exr --layer DiffInd -q " + method +
+            "--stage write --solve " + job.file("shot.solve") + " " + surveys + "--modes " +
+            job.file("m1.modes") + " " + job.file("m2.modes") + " " + job.file("m3.modes");
         run_ok(write_partial + " --frames 6-7 -o " + job.file("farm/d.####.exr") + " --json " +
                job.file("write.json"));
         CHECK(testkit::list_directory(job.file("farm")).size() == 6);
@@ -142,15 +154,21 @@ TEST_CASE("denoise --stage: stats, solve, survey, modes and write tasks give the
         CHECK(write["farm"]["modes_files"].size() == 3);
         CHECK(write["farm"]["survey_files"].size() == 2);
         CHECK(modes["farm"]["rows"] == nlohmann::json::array({75, 149}));
+        // What the solve measured reaches the writes through its file.
+        auto one = nlohmann::json::parse(read_text(job.file("one.json")));
+        const auto& measured = one["layers"][0]["repeating_noise"];
+        CHECK(measured["repeats"] == (input == "rep"));
+        CHECK(write["layers"][0]["repeating_noise"] == measured);
     }
 }
 
 TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partials are refused")
 {
     TempDir dir;
-    testkit::write_sequence(dir.file("in.%04d.exr"), frames(1, kFrames), layout(), noisy_value);
-    testkit::write_sequence(dir.file("other.%04d.exr"), frames(1, kFrames), layout(),
-                            [](int frame, int x, int y, int c) { return noisy_value(frame, x, y, c) * 2 + 0.37f; });
+    testkit::write_sequence(dir.file("in.%04d.exr"), frames(1, kFrames), layout(), fresh_noise);
+    testkit::write_sequence(
+        dir.file("other.%04d.exr"), frames(1, kFrames), layout(),
+        [](int frame, int x, int y, int c) { return fresh_noise(frame, x, y, c) * 2 + 0.37f; });
     const std::string in = "denoise " + dir.file("in.####.exr") + " --layer DiffInd -q ";
     run_ok(in + "--stage stats --rows 1/2 -o " + dir.file("a1.stats"));
     run_ok(in + "--stage stats --rows 2/2 -o " + dir.file("a2.stats"));
