@@ -350,15 +350,16 @@ void warn_of_repeating_noise(const denoise::Report& report, const io::SequenceRe
     }
     for (const auto& [name, noise] : found)
         if (noise->repeats)
-            progress.warn(fmt::format("{}: the noise of {} repeats from frame to frame ({:.0f} % of its "
-                                      "pixel-scale variation stays "
-                                      "put): the temporal rebuild cannot remove it{}; render with a seed "
-                                      "that changes per frame for "
-                                      "the full gain",
-                                      job.input, name, 100 * noise->share,
-                                      spatial
-                                          ? ", so the spatial estimators take over where they measure better"
-                                          : " (--estimators without spatial leaves it in)"));
+            progress.warn(fmt::format(
+                "{}: the noise of {} repeats from frame to frame ({:.0f} % of its pixel-scale variation "
+                "stays put): "
+                "the temporal rebuild cannot remove it{}; render with a seed that changes per frame for the "
+                "full gain",
+                job.input, name, 100 * noise->share,
+                !noise->counted()
+                    ? " and, with edges in it, the estimators do not count it (sigma is too small)"
+                : spatial ? ", so the spatial estimators take over where they measure better"
+                          : " (--estimators without spatial leaves it in)"));
 }
 
 DenoiseResult denoise_in_arena(const DenoiseJob& job, const CommonOptions& context_options)

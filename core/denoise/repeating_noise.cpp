@@ -12,31 +12,33 @@ namespace {
 
 constexpr int kCoarse = 2; // the coarse term's distance along the row
 
-// The first frame of each pair, spread over the shot with the first and last pair at its ends.
-std::vector<int> pair_starts(int frames)
+// The middle frame of each triple of consecutive frames, spread over the shot
+// with the first and last triple at its ends.
+std::vector<int> triple_middles(int frames)
 {
-    const int pairs = std::min(kRepeatingNoisePairs, frames - 1);
-    std::vector<int> starts;
-    for (int k = 0; k < pairs; ++k) {
-        const int start =
-            pairs == 1 ? 0
-                       : static_cast<int>(std::lround(static_cast<double>(k) * (frames - 2) / (pairs - 1)));
-        if (starts.empty() || start > starts.back())
-            starts.push_back(start);
+    const int triples = std::min(kRepeatingNoiseTriples, frames - 2);
+    std::vector<int> middles;
+    for (int k = 0; k < triples; ++k) {
+        const int middle =
+            1 + (triples == 1
+                     ? 0
+                     : static_cast<int>(std::lround(static_cast<double>(k) * (frames - 3) / (triples - 1))));
+        if (middles.empty() || middle > middles.back())
+            middles.push_back(middle);
     }
-    return starts;
+    return middles;
 }
 
-// (y(x) − y(x + distance))² / 2 along the row: the same form as the
-// frame-to-frame term, so that both have the same distribution under noise that
-// is new in every pixel and frame, whatever its shape (sparse 4-spp noise
-// included). NaN at the row's end or where a value is not finite.
-float neighbour_power(const float* row, int width, int x, int distance)
+// (y(x − d) − 2·y(x) + y(x + d))² / 6 along the row: the same form as the
+// term in time, so that both have the same distribution under noise that is
+// new in every pixel and frame, whatever its shape. NaN past the row's ends or
+// where a value is not finite.
+float row_power(const float* row, int width, int x, int distance)
 {
-    if (x + distance >= width)
+    if (x - distance < 0 || x + distance >= width)
         return std::numeric_limits<float>::quiet_NaN();
-    const double d = static_cast<double>(row[x]) - row[x + distance];
-    return static_cast<float>(d * d / 2);
+    const double d = static_cast<double>(row[x - distance]) - 2.0 * row[x] + row[x + distance];
+    return static_cast<float>(d * d / 6);
 }
 
 // The median of the finite values among `values` (NaN when there is none): the
@@ -59,6 +61,11 @@ double median_of(std::vector<float>& values)
 
 } // namespace
 
+bool RepeatingNoise::counted() const
+{
+    return repeats && whiteness >= kCountedWhiteness;
+}
+
 std::vector<RepeatingNoise>
 measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& groups, Progress& progress)
 {
@@ -66,10 +73,10 @@ measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& gr
     const ShotShape shape = source.shape();
     if (shape.frames < 2 || shape.width <= 0 || shape.height <= 0 || shape.channels <= 0 || groups.empty())
         return results;
-    const std::vector<int> starts = pair_starts(shape.frames);
+    const std::vector<int> middles = triple_middles(shape.frames);
     std::vector<int> frames;
-    for (int start : starts)
-        for (int t : {start, start + 1})
+    for (int middle : middles)
+        for (int t : {middle - 1, middle, middle + 1})
             if (std::find(frames.begin(), frames.end(), t) == frames.end())
                 frames.push_back(t);
     std::sort(frames.begin(), frames.end());
@@ -77,9 +84,9 @@ measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& gr
         return static_cast<size_t>(std::find(frames.begin(), frames.end(), t) - frames.begin());
     };
 
-    const int width = shape.width, channels = shape.channels, count = static_cast<int>(starts.size());
+    const int width = shape.width, channels = shape.channels, count = static_cast<int>(middles.size());
     const size_t pixels = static_cast<size_t>(width) * static_cast<size_t>(shape.height);
-    // Per group, per pixel: the three medians over the pairs.
+    // Per group, per pixel: the three medians over the triples.
     struct Powers {
         std::vector<float> temporal, spatial, coarse;
     };
@@ -109,20 +116,20 @@ measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& gr
             }
         });
         tbb::parallel_for(row, end, [&](int y) {
-            std::array<float, kRepeatingNoisePairs> time_terms{}, fine_terms{}, coarse_terms{};
+            std::array<float, kRepeatingNoiseTriples> time_terms{}, fine_terms{}, coarse_terms{};
             for (size_t g = 0; g < groups.size(); ++g)
                 for (int x = 0; x < width; ++x) {
-                    const std::int64_t here = static_cast<std::int64_t>(y - row) * width + x;
+                    const size_t here = static_cast<size_t>(static_cast<std::int64_t>(y - row) * width + x);
                     for (int k = 0; k < count; ++k) {
-                        const int start = starts[static_cast<size_t>(k)];
-                        const std::vector<float>& first = means[g][slot_of(start)];
-                        const std::vector<float>& second = means[g][slot_of(start + 1)];
-                        const double d = static_cast<double>(second[static_cast<size_t>(here)]) -
-                                         first[static_cast<size_t>(here)];
-                        time_terms[static_cast<size_t>(k)] = static_cast<float>(d * d / 2); // NaN stays NaN
-                        const float* row_values = first.data() + (here - x);
-                        fine_terms[static_cast<size_t>(k)] = neighbour_power(row_values, width, x, 1);
-                        coarse_terms[static_cast<size_t>(k)] = neighbour_power(row_values, width, x, kCoarse);
+                        const int middle = middles[static_cast<size_t>(k)];
+                        const std::vector<float>& before = means[g][slot_of(middle - 1)];
+                        const std::vector<float>& centre = means[g][slot_of(middle)];
+                        const std::vector<float>& after = means[g][slot_of(middle + 1)];
+                        const double d = static_cast<double>(before[here]) - 2.0 * centre[here] + after[here];
+                        time_terms[static_cast<size_t>(k)] = static_cast<float>(d * d / 6); // NaN stays NaN
+                        const float* row_values = centre.data() + (here - static_cast<size_t>(x));
+                        fine_terms[static_cast<size_t>(k)] = row_power(row_values, width, x, 1);
+                        coarse_terms[static_cast<size_t>(k)] = row_power(row_values, width, x, kCoarse);
                     }
                     const size_t pixel =
                         static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);

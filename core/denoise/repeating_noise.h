@@ -7,24 +7,26 @@
 // remove it, once the choice's risk counts it.
 //
 // The measurement compares two powers of the input as read, each the square
-// of one difference of two values, so that under noise new in every pixel and
-// frame both have the same distribution, whatever its shape (sparse 4-spp
-// noise included):
-//   temporal: (y_{t+1}(x) − y_t(x))² / 2 over a few pairs of consecutive frames,
-//   spatial:  (y_t(x) − y_t(x + 1))² / 2 in the first frame of each pair,
-//   coarse:   the same with the neighbour 2 pixels along,
-// y the channel mean of the pixel; per pixel the median over the pairs, then
-// the median over pixels (robust to fireflies, edges and a pair that straddles
-// a change of the lighting). Noise new in every frame gives temporal ≈ spatial
-// (the picture's detail only adds to spatial); noise that repeats gives
+// of one second difference, so that under noise new in every pixel and frame
+// both have the same distribution, whatever its shape (sparse 4-spp noise
+// included), and a change that is smooth in time or space (a light that moves,
+// a gradient) cancels:
+//   temporal: (y_{t−1}(x) − 2·y_t(x) + y_{t+1}(x))² / 6 over a few triples of
+//             consecutive frames,
+//   spatial:  (y_t(x − 1) − 2·y_t(x) + y_t(x + 1))² / 6 in each triple's middle frame,
+//   coarse:   the same with the neighbours 2 pixels away,
+// y the channel mean of the pixel; per pixel the median over the triples, then
+// the median over pixels (robust to fireflies, edges and a triple that
+// straddles a jump of the lighting). Noise new in every frame gives temporal ≈
+// spatial (the picture's detail only adds to spatial); noise that repeats gives
 // temporal ≈ 0, so the repeating share is 1 − temporal/spatial. Still detail of
 // a clean picture would look the same, but a picture's detail seen through the
 // renderer's pixel filter is smooth at the pixel scale, while render noise is
-// white: its power 1 pixel apart equals that 2 apart. So the noise is said to
-// repeat only where at least half of the pixel-scale variation stays from frame
-// to frame *and* it is white (spatial at least half of coarse). Direct light,
-// whose pixel-scale variation is mostly its edges, stays below the first bar
-// even where its noise repeats (measured: bench/results/estimators.md).
+// white: its power at 1 pixel equals that at 2. So the noise is said to repeat
+// only where at least half of the pixel-scale variation stays from frame to
+// frame *and* it is white (spatial at least half of coarse). Measured on the
+// benchmark (bench/results/estimators.md): animated seeds 0.19 at most (direct
+// light), fixed seeds 0.59 (direct light lit by a light that orbits) and more.
 #pragma once
 
 #include "core/common/progress.h"
@@ -43,14 +45,26 @@ struct RepeatingNoise {
     double share = 0;        ///< 1 − temporal/spatial in [0, 1] (0 where spatial is 0)
     double whiteness = 0;    ///< spatial/coarse (0 where coarse is 0)
     bool repeats = false;    ///< share ≥ 0.5 and whiteness ≥ 0.5
-    std::vector<int> frames; ///< the frame indices read, in pairs of consecutive frames
+    std::vector<int> frames; ///< the frame indices read, in triples of consecutive frames
 
-    /// The share the estimator choice counts: share where the noise repeats, else 0.
-    double counted_share() const { return repeats ? share : 0.0; }
+    /// Whether the estimator choice counts it: where the noise repeats and its
+    /// pixel-scale variation is as white as render noise measures (whiteness at
+    /// least kCountedWhiteness). The choice takes each pixel's repeating noise
+    /// from the input's own high-pass power, which next to a hard shadow's edge
+    /// is mostly the edge: counted there it made the blurs take the edges
+    /// (bench/results/estimators.md, section 8).
+    bool counted() const;
+    /// The share the estimator choice counts: share where counted(), else 0.
+    double counted_share() const { return counted() ? share : 0.0; }
 };
 
-/// Pairs of consecutive frames read (fewer in a shot of fewer frames).
-inline constexpr int kRepeatingNoisePairs = 3;
+/// The whiteness from which the choice counts the noise that repeats: white
+/// noise measures 1 (0.93–1.01 on the benchmark's indirect light), a picture's
+/// edges pull it down (0.73–0.98 on its direct light).
+inline constexpr double kCountedWhiteness = 0.9;
+
+/// Triples of consecutive frames read (fewer in a shot of fewer frames).
+inline constexpr int kRepeatingNoiseTriples = 3;
 /// Rows read at a time: each frame read is read in this many rows per call.
 inline constexpr int kRepeatingNoiseBandRows = 64;
 
@@ -60,8 +74,8 @@ struct ChannelGroup {
     int count = 0;
 };
 
-/// Measures `source`'s frames in pairs spread over the shot (first and last
-/// pair at the shot's ends), in bands of rows, each group of channels on its
+/// Measures `source`'s frames in triples spread over the shot (first and last
+/// triple at the shot's ends), in bands of rows, each group of channels on its
 /// own from the one read. Deterministic: the same frames and the same result
 /// for a whole run and a farm.
 std::vector<RepeatingNoise>

@@ -272,7 +272,7 @@ TEST_CASE("layer runs: the shot is decoded once per pass for all layers, not onc
         const int bands = (kHeight + report.plan.band_rows - 1) / report.plan.band_rows;
         // The look for noise that repeats reads a few frames once for all layers, in its own bands.
         const std::size_t looked = report.layers.at(0).repeating_noise.frames.size();
-        CHECK(looked == 6);
+        CHECK(looked == 9);
         CHECK(report.layers.at(1).repeating_noise.frames.size() == looked);
         const std::int64_t reads =
             counted.reads -

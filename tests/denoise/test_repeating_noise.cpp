@@ -21,7 +21,7 @@ constexpr int kWidth = 48, kHeight = 100, kFrames = 20; // 100 rows: two bands o
 // A lit wall with a soft gradient and a light that brightens over the shot.
 float picture(int t, int x, int y)
 {
-    return (0.3f + 0.004f * x + 0.002f * y) * (1.0f + 0.005f * t);
+    return (0.3f + 0.004f * x + 0.002f * y) * (1.0f + 0.02f * t);
 }
 
 // Noise of pixel (x, y, c) in frame t: `repeat` draws the same numbers every
@@ -65,8 +65,9 @@ TEST_CASE("repeating noise: the same noise in every frame repeats, noise new in 
         const RepeatingNoise repeated = measure_repeating_noise(fixed, Progress::silent());
         CHECK(repeated.measured);
         CHECK(repeated.repeats);
-        // Only the light's slow change is left in time: a sliver of the noise's power.
+        // The light's steady change cancels in the second difference: nothing is left in time.
         CHECK(repeated.share > 0.95);
+        CHECK(repeated.counted());
         CHECK(repeated.counted_share() == repeated.share);
         // White: as much power 1 pixel apart as 2 apart (the gradient adds next to nothing).
         CHECK(repeated.whiteness == doctest::Approx(1.0).epsilon(0.1));
@@ -101,7 +102,7 @@ TEST_CASE("repeating noise: a clean picture's still detail is smooth at the pixe
     CHECK(detail.counted_share() == 0.0);
 }
 
-TEST_CASE("repeating noise: each layer on its own from one read, the frames in pairs over the shot")
+TEST_CASE("repeating noise: each layer on its own from one read, the frames in triples over the shot")
 {
     struct Counting : ForwardingSource {
         using ForwardingSource::ForwardingSource;
@@ -120,8 +121,8 @@ TEST_CASE("repeating noise: each layer on its own from one read, the frames in p
     REQUIRE(layers.size() == 2);
     CHECK_FALSE(layers[0].repeats);
     CHECK(layers[1].repeats);
-    // Pairs at the shot's start, middle and end; each of their frames read once per band of rows.
-    const std::vector<int> expected{0, 1, 9, 10, 18, 19};
+    // Triples at the shot's start, middle and end; each of their frames read once per band of rows.
+    const std::vector<int> expected{0, 1, 2, 9, 10, 11, 17, 18, 19};
     CHECK(layers[0].frames == expected);
     CHECK(layers[1].frames == expected);
     const int bands = (kHeight + kRepeatingNoiseBandRows - 1) / kRepeatingNoiseBandRows;
@@ -137,7 +138,7 @@ TEST_CASE("repeating noise: each layer on its own from one read, the frames in p
 }
 
 TEST_CASE(
-    "repeating noise: three frames give two pairs, a non-finite value is skipped, nothing to measure is 0")
+    "repeating noise: three frames give one triple, a non-finite value is skipped, nothing to measure is 0")
 {
     MemoryShot shot = shot_of({true});
     shot.frames.resize(3);
@@ -157,4 +158,21 @@ TEST_CASE(
     CHECK(none.share == 0.0);
     CHECK(none.whiteness == 0.0);
     CHECK_FALSE(none.repeats);
+}
+
+TEST_CASE("repeating noise: the choice counts it only where it is as white as render noise")
+{
+    RepeatingNoise found;
+    found.measured = found.repeats = true;
+    found.share = 0.8;
+    for (double whiteness : {0.5, 0.89, 0.9, 1.05}) {
+        CAPTURE(whiteness);
+        found.whiteness = whiteness;
+        CHECK(found.counted() == (whiteness >= kCountedWhiteness));
+        CHECK(found.counted_share() == (found.counted() ? 0.8 : 0.0));
+    }
+    found.repeats = false;
+    found.whiteness = 1;
+    CHECK_FALSE(found.counted());
+    CHECK(found.counted_share() == 0.0);
 }

@@ -183,7 +183,8 @@ TEST_CASE("denoise on noise that repeats from frame to frame says so, and its sp
     CHECK(repeating["repeats"] == true);
     CHECK(repeating["share"].get<double>() > 0.9);
     CHECK(repeating["whiteness"].get<double>() > 0.8);
-    CHECK(repeating["frames_read"] == 6);
+    CHECK(repeating["frames_read"] == 9);
+    CHECK(repeating["counted"] == true);
     // The temporal rebuild alone keeps it; the choice, counting it, removes most of it.
     auto rebuild =
         run_modestack("denoise " + dir.file("in.####.exr") + " -o " + dir.file("rebuild/den.####.exr") +
