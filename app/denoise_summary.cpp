@@ -147,7 +147,8 @@ nlohmann::ordered_json denoise_json(const DenoiseResult& result)
                                         {"temporal_power", noise.temporal},
                                         {"spatial_power", noise.spatial},
                                         {"coarse_power", noise.coarse},
-                                        {"frames_read", noise.frames.size()}};
+                                        {"frames_read", noise.frames.size()},
+                                        {"seconds", noise.seconds}};
         layers.push_back(entry);
     }
     json["layers"] = layers;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -69,6 +70,7 @@ bool RepeatingNoise::counted() const
 std::vector<RepeatingNoise>
 measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& groups, Progress& progress)
 {
+    const auto start = std::chrono::steady_clock::now();
     std::vector<RepeatingNoise> results(groups.size());
     const ShotShape shape = source.shape();
     if (shape.frames < 2 || shape.width <= 0 || shape.height <= 0 || shape.channels <= 0 || groups.empty())
@@ -141,9 +143,11 @@ measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& gr
         progress.advance(end - row);
     }
     progress.end();
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     for (size_t g = 0; g < groups.size(); ++g) {
         RepeatingNoise& result = results[g];
         result.measured = true;
+        result.seconds = seconds;
         result.frames = frames;
         result.temporal = median_of(powers[g].temporal);
         result.spatial = median_of(powers[g].spatial);

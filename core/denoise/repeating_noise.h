@@ -46,6 +46,7 @@ struct RepeatingNoise {
     double whiteness = 0;    ///< spatial/coarse (0 where coarse is 0)
     bool repeats = false;    ///< share ≥ 0.5 and whiteness ≥ 0.5
     std::vector<int> frames; ///< the frame indices read, in triples of consecutive frames
+    double seconds = 0;      ///< the measurement's wall time (not handed on to a farm's writes)
 
     /// Whether the estimator choice counts it: where the noise repeats and its
     /// pixel-scale variation is as white as render noise measures (whiteness at
