@@ -6,11 +6,13 @@
 #
 #   bench/estimators/scenes.sh MODESTACK [WORK]
 # Environment: SIZE (128x96), FRAMES (1-48), SPP (4), REF_SPP (256 per seed; two
-# seeds), SCENES (static orbit switch spin sweep cross), CYCLES_DIR
+# seeds), SCENES (static orbit switch spin sweep cross), FIXED_SCENES (orbit:
+# rendered again with --fixed-seed, noise that repeats, scored against the
+# same references; each must be in SCENES), CYCLES_DIR
 # (../shared/cycles; skipped when absent), ORBIT_CROSS_DIR (the OUTDIR of
 # bench/cycles/render.sh: a Cycles shot with an orbiting light, a crossing sphere
 # and a light switched on; WORK/orbit_cross_room/render; skipped unless its three
-# variants are complete), CHOICES (the --estimators lists scored beside the
+# variants are complete; its noisy_fixed too when rendered), CHOICES (the --estimators lists scored beside the
 # default; "rebuild,input,spatial").
 # Renders are kept in WORK and reused. ~35 min of CPU for the references at
 # 128x96 on the 2-core machine of 2026-12-04.
@@ -24,6 +26,7 @@ frames=${FRAMES:-1-48}
 spp=${SPP:-4}
 ref_spp=${REF_SPP:-256}
 scenes=${SCENES:-static orbit switch spin sweep cross}
+fixed_scenes=${FIXED_SCENES:-orbit}
 cycles=${CYCLES_DIR:-$here/../../../shared/cycles}
 orbit_cross=${ORBIT_CROSS_DIR:-$work/orbit_cross_room/render}
 choices=${CHOICES:-rebuild,input,spatial}
@@ -53,7 +56,8 @@ denoise()
 }
 
 # The transient frames of each shot: where content changes for a few frames.
-declare -A transient=([switch]=30-36 [cross]=20-27 [sweep_room]=20-27 [orbit_cross_room]=20-29)
+declare -A transient=([switch]=30-36 [cross]=20-27 [sweep_room]=20-27 [orbit_cross_room]=20-29
+                      [orbit_cross_room-fixed-seed]=20-29)
 shots=()
 for scene in $scenes; do
     render noisy "$spp" 1 "$scene"
@@ -61,12 +65,19 @@ for scene in $scenes; do
     render ref_b "$ref_spp" 8 "$scene"
     shots+=("$scene|$work/$scene/noisy/f.####.exr|$work/$scene/ref_a/f.*.exr|$work/$scene/ref_b/f.*.exr|")
 done
+# Noise that repeats from frame to frame: the first scene rendered again with a fixed seed.
+for scene in $fixed_scenes; do
+    render noisy_fixed "$spp" 1 "$scene" --fixed-seed
+    shots+=("$scene-fixed-seed|$work/$scene/noisy_fixed/f.####.exr|$work/$scene/ref_a/f.*.exr|$work/$scene/ref_b/f.*.exr|")
+done
 for shot in sweep_room spin_room; do
     [ -d "$cycles/$shot" ] || { echo "SKIPPED: $cycles/$shot not found"; continue; }
     shots+=("$shot|$cycles/$shot/spp4/frame.####.exr|$cycles/$shot/ref/frame.*.exr||ViewLayer.")
 done
 if [ -f "$orbit_cross/noisy/done" ] && [ -f "$orbit_cross/ref_a/done" ] && [ -f "$orbit_cross/ref_b/done" ]; then
     shots+=("orbit_cross_room|$orbit_cross/noisy/frame.####.exr|$orbit_cross/ref_a/frame.*.exr|$orbit_cross/ref_b/frame.*.exr|ViewLayer.")
+    [ -f "$orbit_cross/noisy_fixed/done" ] &&
+        shots+=("orbit_cross_room-fixed-seed|$orbit_cross/noisy_fixed/frame.####.exr|$orbit_cross/ref_a/frame.*.exr|$orbit_cross/ref_b/frame.*.exr|ViewLayer.")
 else
     echo "SKIPPED: $orbit_cross has no complete noisy, ref_a, ref_b (render them with bench/cycles/render.sh)"
 fi
