@@ -15,7 +15,11 @@
 // Gaussian's centre weight, 1 for the input (S = v). y is the input as read (NaN/Inf cleaned, not fireflies:
 // the temporal firefly clamp hides the rebuild's errors where the light moves). v is the windowed mean of the
 // squared 4-neighbour high-pass of the residual y − rebuild, divided by 1 + 1/k for k neighbours: a mean (not
-// a median), so that v is the variance of the very samples SURE sees.
+// a median), so that v is the variance of the very samples SURE sees. Noise
+// that repeats from frame to frame (repeating_noise.h) is not in the residual:
+// where it is counted, v gains share × the same windowed power of the input's
+// own high-pass, and the rebuild, which keeps that part whole, takes it with
+// slope 1 in its SURE, its sigma and the per-pixel test in time.
 //
 // The rebuild is kept unless another estimator's pooled SURE is lower by more
 // than z standard errors of the window mean of the per-pixel difference. SURE of
