@@ -56,7 +56,9 @@ void add_method_options(CLI::App& command, MethodOptions& options)
         "rejected); 'rebuild' alone turns the choice off. "
         "The rebuild is kept unless another's risk (SURE, 7x7) is lower by 2 standard errors, or the input "
         "lies far below it over 3x3 pixels, or the input at a pixel stays put over 4 frames while the "
-        "rebuild is far from it (then the input is taken); sigma is the "
+        "rebuild is far from it (then the input is taken); noise found to repeat from frame to frame (a "
+        "fixed seed: warned of) counts in every candidate's risk where it is as white as render noise "
+        "(indirect light); sigma is the "
         "chosen value's estimated error. Default auto: rebuild,input,spatial,nlmeans, but the rebuild alone "
         "with --rank-map (its map is of the rebuild) and --object-space (no image neighbours)");
 }
