@@ -139,16 +139,13 @@ nlohmann::ordered_json denoise_json(const DenoiseResult& result)
             entry["frame_noise_factors"] = own.frame_noise_factors;
         // Noise that repeats from frame to frame (core/denoise/repeating_noise.h).
         if (const denoise::RepeatingNoise& noise = own.repeating_noise; noise.measured)
-            entry["repeating_noise"] = {{"repeats", noise.repeats},
-                                        {"share", noise.share},
-                                        {"whiteness", noise.whiteness},
-                                        {"counted", noise.counted()},
-                                        {"counted_share", noise.counted_share()},
-                                        {"temporal_power", noise.temporal},
-                                        {"spatial_power", noise.spatial},
-                                        {"coarse_power", noise.coarse},
-                                        {"frames_read", noise.frames.size()},
-                                        {"seconds", noise.seconds}};
+            entry["repeating_noise"] = {
+                {"repeats", noise.repeats},         {"share", noise.share},
+                {"whiteness", noise.whiteness},     {"level", noise.level},
+                {"counted", noise.counted()},       {"counted_share", noise.counted_share()},
+                {"temporal_power", noise.temporal}, {"spatial_power", noise.spatial},
+                {"coarse_power", noise.coarse},     {"frames_read", noise.frames.size()},
+                {"seconds", noise.seconds}};
         layers.push_back(entry);
     }
     json["layers"] = layers;

@@ -378,7 +378,8 @@ std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::Solve
     header["repeating_noise"] = {{"measured", repeating.measured}, {"temporal", repeating.temporal},
                                  {"spatial", repeating.spatial},   {"coarse", repeating.coarse},
                                  {"share", repeating.share},       {"whiteness", repeating.whiteness},
-                                 {"repeats", repeating.repeats},   {"frames", repeating.frames}};
+                                 {"level", repeating.level},       {"repeats", repeating.repeats},
+                                 {"frames", repeating.frames}};
     Payload payload;
     payload.add_gram(solved.gram);
     return stage_bytes(header, payload);
@@ -408,6 +409,7 @@ denoise::SolvedSums read_solve(const StageBytes& solve, const ShotFingerprint& f
         solved.repeating.coarse = repeating.at("coarse").get<double>();
         solved.repeating.share = repeating.at("share").get<double>();
         solved.repeating.whiteness = repeating.at("whiteness").get<double>();
+        solved.repeating.level = repeating.at("level").get<double>();
         solved.repeating.repeats = repeating.at("repeats").get<bool>();
         solved.repeating.frames = repeating.at("frames").get<std::vector<int>>();
         return solved;

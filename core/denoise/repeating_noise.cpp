@@ -90,10 +90,10 @@ measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& gr
     const size_t pixels = static_cast<size_t>(width) * static_cast<size_t>(shape.height);
     // Per group, per pixel: the three medians over the triples.
     struct Powers {
-        std::vector<float> temporal, spatial, coarse;
+        std::vector<float> temporal, spatial, coarse, magnitude;
     };
-    std::vector<Powers> powers(
-        groups.size(), {std::vector<float>(pixels), std::vector<float>(pixels), std::vector<float>(pixels)});
+    std::vector<Powers> powers(groups.size(), {std::vector<float>(pixels), std::vector<float>(pixels),
+                                               std::vector<float>(pixels), std::vector<float>(pixels)});
     // Per frame read: its rows as read, then per group the channel mean of each pixel.
     std::vector<std::vector<float>> rows(frames.size());
     std::vector<std::vector<std::vector<float>>> means(groups.size(),
@@ -118,7 +118,8 @@ measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& gr
             }
         });
         tbb::parallel_for(row, end, [&](int y) {
-            std::array<float, kRepeatingNoiseTriples> time_terms{}, fine_terms{}, coarse_terms{};
+            std::array<float, kRepeatingNoiseTriples> time_terms{}, fine_terms{}, coarse_terms{},
+                magnitudes{};
             for (size_t g = 0; g < groups.size(); ++g)
                 for (int x = 0; x < width; ++x) {
                     const size_t here = static_cast<size_t>(static_cast<std::int64_t>(y - row) * width + x);
@@ -132,12 +133,14 @@ measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& gr
                         const float* row_values = centre.data() + (here - static_cast<size_t>(x));
                         fine_terms[static_cast<size_t>(k)] = row_power(row_values, width, x, 1);
                         coarse_terms[static_cast<size_t>(k)] = row_power(row_values, width, x, kCoarse);
+                        magnitudes[static_cast<size_t>(k)] = std::abs(centre[here]);
                     }
                     const size_t pixel =
                         static_cast<size_t>(y) * static_cast<size_t>(width) + static_cast<size_t>(x);
                     powers[g].temporal[pixel] = finite_median(time_terms.data(), count);
                     powers[g].spatial[pixel] = finite_median(fine_terms.data(), count);
                     powers[g].coarse[pixel] = finite_median(coarse_terms.data(), count);
+                    powers[g].magnitude[pixel] = finite_median(magnitudes.data(), count);
                 }
         });
         progress.advance(end - row);
@@ -155,7 +158,9 @@ measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& gr
         result.share =
             result.spatial > 0 ? std::clamp(1.0 - result.temporal / result.spatial, 0.0, 1.0) : 0.0;
         result.whiteness = result.coarse > 0 ? result.spatial / result.coarse : 0.0;
-        result.repeats = result.share >= 0.5 && result.whiteness >= 0.5;
+        const double magnitude = median_of(powers[g].magnitude);
+        result.level = magnitude > 0 ? std::sqrt(result.spatial) / magnitude : 0.0;
+        result.repeats = result.share >= 0.5 && result.whiteness >= 0.5 && result.level >= kLeastNoiseLevel;
     }
     return results;
 }

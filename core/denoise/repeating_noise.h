@@ -38,13 +38,14 @@ namespace modestack::denoise {
 
 /// What the measurement found.
 struct RepeatingNoise {
-    bool measured = false;   ///< false: not looked for (no estimator choice) or too few frames
-    double temporal = 0;     ///< median frame-to-frame power (see the file comment)
-    double spatial = 0;      ///< median power between neighbours in a row
-    double coarse = 0;       ///< the same 2 pixels apart
-    double share = 0;        ///< 1 − temporal/spatial in [0, 1] (0 where spatial is 0)
-    double whiteness = 0;    ///< spatial/coarse (0 where coarse is 0)
-    bool repeats = false;    ///< share ≥ 0.5 and whiteness ≥ 0.5
+    bool measured = false; ///< false: not looked for (no estimator choice) or too few frames
+    double temporal = 0;   ///< median frame-to-frame power (see the file comment)
+    double spatial = 0;    ///< median power between neighbours in a row
+    double coarse = 0;     ///< the same 2 pixels apart
+    double share = 0;      ///< 1 − temporal/spatial in [0, 1] (0 where spatial is 0)
+    double whiteness = 0;  ///< spatial/coarse (0 where coarse is 0)
+    double level = 0;      ///< √spatial over the median |value|: the pixel-scale variation's relative size
+    bool repeats = false;  ///< share ≥ 0.5, whiteness ≥ 0.5 and level ≥ kLeastNoiseLevel
     std::vector<int> frames; ///< the frame indices read, in triples of consecutive frames
     double seconds = 0;      ///< the measurement's wall time (not handed on to a farm's writes)
 
@@ -58,6 +59,13 @@ struct RepeatingNoise {
     /// The share the estimator choice counts: share where counted(), else 0.
     double counted_share() const { return counted() ? share : 0.0; }
 };
+
+/// The least relative pixel-scale variation that is said to be noise: 0.1 %
+/// of the picture's typical value, 7× the rounding of a half float (2^-11/√12
+/// RMS), which a clean render repeats in every frame too. A few samples per
+/// pixel leave 0.3–5 % at the median pixel of the benchmark's direct light and
+/// 30–70 % on its indirect light.
+inline constexpr double kLeastNoiseLevel = 0.001;
 
 /// The whiteness from which the choice counts the noise that repeats: white
 /// noise measures 1 (0.93–1.01 on the benchmark's indirect light), a picture's

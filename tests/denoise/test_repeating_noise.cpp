@@ -160,6 +160,23 @@ TEST_CASE(
     CHECK_FALSE(none.repeats);
 }
 
+TEST_CASE("repeating noise: a clean render's rounding, white and the same in every frame, is not noise")
+{
+    // Repeating and white, but 0.01 % of the picture: what a half float's rounding
+    // of a noise-free render looks like.
+    MemoryShot rounded = shot_of({true}, false, 0.001f);
+    const RepeatingNoise tiny = measure_repeating_noise(rounded, Progress::silent());
+    CHECK(tiny.share > 0.5);
+    CHECK(tiny.whiteness > 0.5);
+    CHECK(tiny.level < kLeastNoiseLevel);
+    CHECK_FALSE(tiny.repeats);
+    // The same noise 250 times stronger (10 % of the picture, a few spp) is.
+    MemoryShot noisy = shot_of({true}, false, 1.0f);
+    const RepeatingNoise found = measure_repeating_noise(noisy, Progress::silent());
+    CHECK(found.level > kLeastNoiseLevel);
+    CHECK(found.repeats);
+}
+
 TEST_CASE("repeating noise: the choice counts it only where it is as white as render noise")
 {
     RepeatingNoise found;
