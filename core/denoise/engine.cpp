@@ -50,7 +50,7 @@ Report run_denoise(FrameSource& source, FrameSink& sink, const Settings& setting
     const PassContext context{source, sink, settings, progress};
     check_settings(settings, shape);
     RunPlan plan = plan_run(context, true);
-    look_for_repeating_noise(context, plan);
+    plan.repeating = measure_repeating_noise(source, progress); // a few more frames read
     Report report;
     report.repeating_noise = plan.repeating;
     report.shape = shape;

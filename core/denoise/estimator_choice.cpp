@@ -273,7 +273,7 @@ int clipped_window(int width, int height, int x, int y, int radius)
 // pages would cost the kernel's zeroing every time).
 struct Workspace {
     Plane residual, high_pass, variance, below, below_mean, noise_scale, noise_scale_mean;
-    Plane input_rows, input_high_pass, input_power, repeating, total_variance; // noise that repeats
+    Plane input_rows, input_high_pass, repeating, total_variance; // noise that repeats
     std::array<Plane, 2> blurred;
     std::array<Plane, kEstimators> sure, sure_squared, difference, difference_squared;
     std::array<Plane, kEstimators> sure_mean, sure_square_mean, difference_mean, difference_square_mean,
@@ -445,14 +445,13 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
         for (int y = residual_begin; y < residual_end; ++y)
             std::copy(input_at(y), input_at(y) + row_samples, rows.row(y));
         squared_high_pass(rows, height, pass_begin, pass_end, work.input_high_pass);
-        box_mean(work.input_high_pass, height, radius, window_begin, window_end, work.input_power,
-                 work.scratch, work.column);
-        work.repeating.reset(window_begin, window_end, width, channels);
+        box_mean(work.input_high_pass, height, radius, window_begin, window_end, work.repeating, work.scratch,
+                 work.column);
         work.total_variance.reset(window_begin, window_end, width, channels);
         for (int y = window_begin; y < window_end; ++y)
             for (std::int64_t i = 0; i < row_samples; ++i) {
-                const float part = static_cast<float>(frame.repeating_share * work.input_power.row(y)[i]);
-                work.repeating.row(y)[i] = part;
+                float& part = work.repeating.row(y)[i]; // the input's power, then the share of it
+                part = static_cast<float>(frame.repeating_share * part);
                 work.total_variance.row(y)[i] = variance.row(y)[i] + part;
             }
     }

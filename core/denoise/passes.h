@@ -34,7 +34,8 @@ struct RunPlan {
     Solver solver = Solver::Gram;
     ModeFilterOptions filter;             ///< the settings' with the feature channels found
     std::optional<FeatureGuide> features; ///< the mode filter's feature guide (none: unguided)
-    RepeatingNoise repeating; ///< what the choice counts of noise that repeats (look_for_repeating_noise)
+    RepeatingNoise
+        repeating; ///< noise that repeats, measured by the run or its solve task (repeating_noise.h)
 };
 
 /// Checks the settings against the shot: a usage error for what the data
@@ -54,10 +55,6 @@ Solver plan_solver(const Settings& settings, const ShotShape& shape);
 /// Plans the bands and picks the solver for checked settings; `with_features`:
 /// open the mode filter's feature guide (a run or task that filters).
 RunPlan plan_run(const PassContext& context, bool with_features);
-/// Measures the shot's noise that repeats from frame to frame into
-/// plan.repeating (repeating_noise.h: a few more frames read), which the
-/// estimator choice counts and the run reports. For the run or task that writes.
-void look_for_repeating_noise(const PassContext& context, RunPlan& plan);
 
 /// The temporal modes and N.
 struct Solution {

@@ -82,9 +82,15 @@ measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& gr
             if (std::find(frames.begin(), frames.end(), t) == frames.end())
                 frames.push_back(t);
     std::sort(frames.begin(), frames.end());
-    auto slot_of = [&](int t) {
-        return static_cast<size_t>(std::find(frames.begin(), frames.end(), t) - frames.begin());
-    };
+    // Per triple, the slots of its three frames among those read.
+    std::vector<std::array<size_t, 3>> triples;
+    for (int middle : middles) {
+        std::array<size_t, 3> slots{};
+        for (int j = 0; j < 3; ++j)
+            slots[static_cast<size_t>(j)] =
+                static_cast<size_t>(std::find(frames.begin(), frames.end(), middle - 1 + j) - frames.begin());
+        triples.push_back(slots);
+    }
 
     const int width = shape.width, channels = shape.channels, count = static_cast<int>(middles.size());
     const size_t pixels = static_cast<size_t>(width) * static_cast<size_t>(shape.height);
@@ -124,10 +130,10 @@ measure_repeating_noise(FrameSource& source, const std::vector<ChannelGroup>& gr
                 for (int x = 0; x < width; ++x) {
                     const size_t here = static_cast<size_t>(static_cast<std::int64_t>(y - row) * width + x);
                     for (int k = 0; k < count; ++k) {
-                        const int middle = middles[static_cast<size_t>(k)];
-                        const std::vector<float>& before = means[g][slot_of(middle - 1)];
-                        const std::vector<float>& centre = means[g][slot_of(middle)];
-                        const std::vector<float>& after = means[g][slot_of(middle + 1)];
+                        const std::array<size_t, 3>& slots = triples[static_cast<size_t>(k)];
+                        const std::vector<float>& before = means[g][slots[0]];
+                        const std::vector<float>& centre = means[g][slots[1]];
+                        const std::vector<float>& after = means[g][slots[2]];
                         const double d = static_cast<double>(before[here]) - 2.0 * centre[here] + after[here];
                         time_terms[static_cast<size_t>(k)] = static_cast<float>(d * d / 6); // NaN stays NaN
                         const float* row_values = centre.data() + (here - static_cast<size_t>(x));

@@ -114,9 +114,4 @@ RunPlan plan_run(const PassContext& context, bool with_features)
     return plan;
 }
 
-void look_for_repeating_noise(const PassContext& context, RunPlan& plan)
-{
-    plan.repeating = measure_repeating_noise(context.source, context.progress);
-}
-
 } // namespace modestack::denoise
