@@ -622,15 +622,21 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 const double excess = below_row[x] + kBelowMean * scale;
                 rejected = excess < 0 && excess * excess * near > below_limit * scale * scale;
             }
-            // The input steady in time where the rebuild is far from it: the
-            // input is taken (its risk is that small spread; a blur's SURE at a
-            // bright edge can fall far below its true error).
-            if (!rejected && spread_row != nullptr) {
-                const float *input = input_at(y) + static_cast<std::int64_t>(x) * channels,
-                            *rebuilt = rebuilt_at(y) + static_cast<std::int64_t>(x) * channels;
+            if (rejected && chosen == 0) // the candidate with the least SURE over the 3×3 pixels around
+                for (int k = 1; k < kEstimators; ++k)
+                    if (used[k] && (chosen == 0 || near_sure[k][x] < least))
+                        chosen = k, least = near_sure[k][x];
+            // The input steady in time where the value taken, the rebuild or a
+            // blur, is far from it: the input is taken (its risk is that small
+            // spread; a blur's SURE at a bright edge can fall far below its true
+            // error, and a blur wins the window test there as readily as anywhere).
+            if (spread_row != nullptr && chosen != static_cast<int>(Estimator::Input)) {
+                const float* taken = chosen == 0 ? rebuilt_at(y) : blurred[chosen - 2].row(y);
+                const float* input = input_at(y) + static_cast<std::int64_t>(x) * channels;
+                taken += static_cast<std::int64_t>(x) * channels;
                 double distance = 0;
                 for (int c = 0; c < channels; ++c)
-                    distance += static_cast<double>(input[c]) - rebuilt[c];
+                    distance += static_cast<double>(input[c]) - taken[c];
                 distance *= per_channel;
                 // z spreads' upper bound below; above, beyond what a lone bright
                 // sample reaches (√(2n) spreads from its neighbour in time) by
@@ -649,10 +655,6 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                         rejected = true, chosen = static_cast<int>(Estimator::Input);
                 }
             }
-            if (rejected && chosen == 0) // the candidate with the least SURE over the 3×3 pixels around
-                for (int k = 1; k < kEstimators; ++k)
-                    if (used[k] && (chosen == 0 || near_sure[k][x] < least))
-                        chosen = k, least = near_sure[k][x];
             // Sigma: the chosen one's variance part, plus its pooled SURE's excess where significant.
             double floor_sum = 0;
             for (int c = 0; c < channels; ++c) {

@@ -47,12 +47,14 @@
 // cleaner than s says (the edge of a moving hard shadow lit by a point light).
 // There the input's spread in time (temporal_spread.h: its frame-to-frame
 // differences at the pixel and its row neighbours over the 4 frames on the
-// quieter side) is the evidence: the rebuild is rejected and the input taken
-// where the input lies below the rebuild by more than z·√(b·v̂), or above it by
-// more than (√(2n) + z)·√(b·v̂), with z the one-sided test's, n the spread's
-// terms and b its upper-bound factor (spread_bound): a lone firefly cannot pass
-// above. The input, not the least 3×3 SURE: next to a bright edge a blur's
-// SURE falls far below its error.
+// quieter side) is the evidence: the value the tests above took, the rebuild
+// or a blur, gives way to the input where the input lies below it by more
+// than z·√(b·v̂), or above it by more than (√(2n) + z)·√(b·v̂), with z the
+// one-sided test's, n the spread's terms and b its upper-bound factor
+// (spread_bound): a lone firefly cannot pass above. The input, not the least
+// 3×3 SURE: next to a bright edge a blur's SURE falls far below its error, and
+// a blur that won the window test there carries the edge's light onto a dim
+// neighbour as far as the rebuild would.
 // Non-local means of the input (non_local_means.h) keeps the hard edges a
 // Gaussian blurs, but its SURE is biased low on rendered noise, so it is never
 // evidence against the rebuild or any linear candidate: where the rebuild has
