@@ -7,7 +7,19 @@ n = box3((A − B)² / 4) estimates the variance of that mean, so that
 E[(x − ref)²] = (x − truth)² + n. relMSE = mean((x − ref)² − n) / (ref² + 0.01),
 the same denominator as `modestack compare`. Sigma is checked against the error
 it should bound plus the reference's noise: ratios of |x − ref| to
-sqrt(σ² + n). With one reference (B = none) n = 0.
+sqrt(σ² + n). With one reference (B = none) and --spp NOISY/REF (the two
+renders' samples per pixel, independent seeds), the noisy input's own
+difference to it gives n: E[(noisy − ref)²] = v_noisy + v_ref and v_noisy =
+v_ref·REF/NOISY, so n = box2 over ±2 frames of (noisy − ref)² · NOISY/(NOISY +
+REF) (a wider window than two references need, the squares being
+heavy-tailed). That assumes the variance falls as 1/spp; a renderer's
+quasi-random samples make it fall faster, so this n is an upper bound and the
+scores net of it are a lower bound of the error: on the Cycles
+orbit_cross_room shot (4 and 512 spp), scored against one of its two
+references, it counted 1.6× the DiffInd noise the two references measure
+(DiffInd sigma median 1.07 and 3.3 % beyond 3σ, where two references give
+1.42 and 8.8 % and n = 0 gives 3.32 and 41 %). Without --spp, n = 0: an
+upper bound of the error.
 
 Printed per shot: the noisy input, a 1.5 px Gaussian of it, and each denoised
 sequence: relMSE shot-wide, as a multiple of the input's, its worst frame's
@@ -17,7 +29,7 @@ worse than the input; sigma: RMS(err)/RMS(σ), median(|err|/σ)/0.6745, share
 beyond 3σ, recall of the 1 % largest errors in the 10 % largest σ.
 
   scenes.py NOISY_PATTERN REF_A_PATTERN REF_B_PATTERN|none LAYER DENOISED_PATTERN...
-            [--transient FIRST-LAST]
+            [--transient FIRST-LAST] [--spp NOISY/REF]
 """
 import argparse
 import os
@@ -57,13 +69,17 @@ class Scoring:
     """One layer's noisy input and reference, read once, and the score of a
     sequence against them (--transient FIRST-LAST: its region scored apart)."""
 
-    def __init__(self, noisy, ref_a, ref_b, layer, transient=None):
+    def __init__(self, noisy, ref_a, ref_b, layer, transient=None, spp=None):
         self.noisy = read_shot(noisy, layer)
         a = read_shot(ref_a, layer)
         if ref_b != 'none':
             b = read_shot(ref_b, layer)
             self.ref = (a + b) / 2
             self.noise = box((a - b) ** 2 / 4, 1)
+        elif spp:
+            noisy_spp, ref_spp = (float(s) for s in spp.split('/'))
+            self.ref = a
+            self.noise = box((self.noisy - a) ** 2, 2, axes=(0, 1, 2)) * noisy_spp / (noisy_spp + ref_spp)
         else:
             self.ref, self.noise = a, np.zeros_like(a)
         self.transient = None
@@ -82,8 +98,9 @@ def main():
     parser.add_argument('noisy'), parser.add_argument('ref_a'), parser.add_argument('ref_b')
     parser.add_argument('layer'), parser.add_argument('denoised', nargs='+')
     parser.add_argument('--transient', help='FIRST-LAST: frames whose changing pixels are scored apart')
+    parser.add_argument('--spp', help='NOISY/REF: with one reference, count its noise from the spp ratio')
     args = parser.parse_args()
-    scoring = Scoring(args.noisy, args.ref_a, args.ref_b, args.layer, args.transient)
+    scoring = Scoring(args.noisy, args.ref_a, args.ref_b, args.layer, args.transient, args.spp)
     noisy, ref, noise = scoring.noisy, scoring.ref, scoring.noise
     print(f"  reference noise: {relative(noise, ref).mean():.5f} relMSE "
           f"({relative(noise, ref).mean() / scoring.noisy_rel.mean() * 100:.1f} % of the input's)")
