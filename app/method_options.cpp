@@ -58,8 +58,8 @@ void add_method_options(CLI::App& command, MethodOptions& options)
         "lies far below it over 3x3 pixels, or the input at a pixel stays put over 4 frames while the "
         "value taken (the rebuild or a blur) is far from it (then the input is taken); noise found to repeat "
         "from frame to frame (a "
-        "fixed seed: warned of) counts in every candidate's risk where it is as white as render noise "
-        "(indirect light); sigma is the "
+        "fixed seed: warned of) counts in every candidate's risk and in the mode filter's noise levels "
+        "where it is as white as render noise (indirect light); sigma is the "
         "chosen value's estimated error. Default auto: rebuild,input,spatial,nlmeans, but the rebuild alone "
         "with --rank-map (its map is of the rebuild) and --object-space (no image neighbours)");
 }

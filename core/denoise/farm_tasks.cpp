@@ -164,7 +164,8 @@ TaskResult<ModeImages> modes_task(const PassContext& context, const SolvedSums& 
 {
     TaskResult<ModeImages> result;
     Report& report = result.report;
-    const RunPlan plan = plan_task(context, Stage::Modes, report, row_begin, row_end);
+    RunPlan plan = plan_task(context, Stage::Modes, report, row_begin, row_end);
+    plan.repeating = report.repeating_noise = solved.repeating; // the survey's noise scales count it
     const ShotShape& shape = report.shape;
     const Solved modes_of = solved_from(context, plan, solved, survey, report);
     const Settings& settings = context.settings;

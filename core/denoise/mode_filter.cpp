@@ -21,11 +21,6 @@ using lowrank::BandView;
 using lowrank::ImageBandShape;
 using lowrank::MutableBandView;
 
-// Largest noise scale a mode gets. SVD over-fitting raised the noise of pure-noise
-// modes by at most ~2.05× on our renders; a larger high-pass ratio is texture or
-// edges, not noise, and must not make a clean (or nearly clean) shot look noisy.
-constexpr double kMaximumNoiseScale = 4.0;
-
 // A filter without a range or feature term is a Gaussian, separable also where
 // the band clips it (the clipped window is a box): it is applied as a horizontal
 // and a vertical pass, 2(2r+1) taps per sample instead of (2r+1)², with the
@@ -290,7 +285,7 @@ void SureSurvey::restore_row_sums(int row_begin, std::vector<std::vector<double>
     }
 }
 
-ModeFilterPlan SureSurvey::finish(int fixed_modes) const
+ModeFilterPlan SureSurvey::finish(int fixed_modes, double noise_scale_cap) const
 {
     const int candidates = static_cast<int>(m_candidates.size());
     std::vector<double> totals(static_cast<std::size_t>(m_modes) * candidates * 2 + 2 * m_modes + 1, 0.0);
@@ -312,7 +307,7 @@ ModeFilterPlan SureSurvey::finish(int fixed_modes) const
         ModeFilterChoice choice;
         // The mode's own noise energy over Σ v_p (1 when nothing is measured),
         // capped: see kMaximumNoiseScale.
-        choice.noise_scale = noise > 0 ? std::min(kMaximumNoiseScale, high_pass_energy[j] / noise) : 1.0;
+        choice.noise_scale = noise > 0 ? std::min(noise_scale_cap, high_pass_energy[j] / noise) : 1.0;
         const double mode_noise = noise * choice.noise_scale;
         choice.unfiltered_sure = mode_noise;  // identity: ‖c − c‖² + 2 Σ v − Σ v
         choice.sure = mode_noise;

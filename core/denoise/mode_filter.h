@@ -32,6 +32,10 @@
 // fewer modes). A median of the ratio was tried first: it follows the quiet bulk of
 // the pixels, under-estimated the noise modes by a third and kept 16 modes where 3
 // were best (orbit scene, 48 frames).
+// Noise that repeats from frame to frame (a fixed seed) lies in the modes, not in
+// the residual v_p is taken from, so a mode can hold many times v_p of noise: then
+// the cap below is raised by what the measured repeating noise can put in one
+// mode (survey_pass.cpp, noise_scale_cap).
 // Everything is computed per image row from data within a fixed halo, and sums are
 // kept per row and added in row order, so streamed and kept shots give the same bits.
 #pragma once
@@ -78,6 +82,12 @@ struct FilterCandidate {
     double range = 0;          ///< c_1 range-kernel width in guide-noise units; 0 = none
     double feature_range = 0;  ///< feature range-kernel width (normalised units); 0 = none
 };
+
+/// Largest noise scale a mode gets where no noise is known to repeat. SVD
+/// over-fitting raised the noise of pure-noise modes by at most ~2.05× on our
+/// renders; a larger high-pass ratio is texture or edges, not noise, and must not
+/// make a clean (or nearly clean) shot look noisy.
+inline constexpr double kMaximumNoiseScale = 4.0;
 
 /// What the survey found for one mode.
 struct ModeFilterChoice {
@@ -130,8 +140,9 @@ public:
                   const lowrank::ImageBandShape& shape, int band_y0, int valid_y0, int valid_y1,
                   const float* features = nullptr);
     /// Chooses a filter per mode and N: `fixed_rank` > 0 keeps that many modes,
-    /// 0 keeps the prefix that maximises Σ (signal − SURE) (at least 1).
-    ModeFilterPlan finish(int fixed_modes) const;
+    /// 0 keeps the prefix that maximises Σ (signal − SURE) (at least 1). Each
+    /// mode's noise scale is at most `noise_scale_cap`.
+    ModeFilterPlan finish(int fixed_modes, double noise_scale_cap = kMaximumNoiseScale) const;
 
     /// The sums of image rows [row_begin, row_end) as add_band left them (empty for
     /// rows not added), and their restoration, for a survey split over farm tasks

@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include <algorithm>
+#include <limits>
 
 namespace modestack::denoise {
 
@@ -68,6 +69,26 @@ std::vector<std::vector<double>> survey_rows(const PassContext& context, ShotStr
     return survey.finish();
 }
 
+namespace {
+
+// The most noise one mode can hold, over the residual's v, where the choice
+// counts noise that repeats (repeating_noise.h): share c of the per-sample noise
+// repeats, r = c / (1 − c) of the part that is new in each frame (the part v
+// measures), and a mode's temporal weights V_j put at most (Σ_t V_tj)² ≤ F times
+// the repeating part's variance into its coefficients (Cauchy–Schwarz,
+// Σ_t V_tj² = 1). Infinite where nothing is new.
+double noise_scale_cap(const RepeatingNoise& repeating, int frames)
+{
+    const double share = repeating.counted_share();
+    if (share <= 0)
+        return kMaximumNoiseScale;
+    if (share >= 1)
+        return std::numeric_limits<double>::infinity();
+    return kMaximumNoiseScale + frames * share / (1 - share);
+}
+
+} // namespace
+
 Survey finish_survey(const Settings& settings, const ShotShape& shape, const RunPlan& plan,
                      const Solution& solution, std::vector<std::vector<double>> rows)
 {
@@ -76,7 +97,8 @@ Survey finish_survey(const Settings& settings, const ShotShape& shape, const Run
     SureSurvey survey(plan.filter, shape.width, shape.height, shape.channels, result.modes);
     survey.restore_row_sums(0, std::move(rows));
     const bool fixed = settings.rank_rule.rule == lowrank::RankRule::Fixed;
-    result.plan = survey.finish(fixed ? settings.rank_rule.fixed_modes : 0);
+    result.plan = survey.finish(fixed ? settings.rank_rule.fixed_modes : 0,
+                                noise_scale_cap(plan.repeating, shape.frames));
     result.rank_decision = solution.rank_decision;
     if (!fixed) {
         result.rank_decision.kept_modes = result.plan.kept_modes;

@@ -2,6 +2,8 @@
 // where the same noise is in every frame, not where it is new in every frame
 // (Gaussian or heavy-tailed), not in a clean picture's still detail,
 // each layer on its own from one read, the frames read spread over the shot.
+#include "core/common/progress.h"
+#include "core/denoise/engine.h"
 #include "core/denoise/repeating_noise.h"
 #include "tests/denoise/memory_shot.h"
 
@@ -192,4 +194,38 @@ TEST_CASE("repeating noise: the choice counts it only where it is as white as re
     found.whiteness = 1;
     CHECK_FALSE(found.counted());
     CHECK(found.counted_share() == 0.0);
+}
+
+TEST_CASE("repeating noise: the mode filter's survey counts it, so the rebuild smooths it away")
+{
+    // The same Gaussian noise in every frame: it lies in the modes (most of it in
+    // the first), not in the residual the survey's noise level comes from. The
+    // survey's noise scale of a mode may then exceed kMaximumNoiseScale by what
+    // the measured repeating noise can put in one mode.
+    MemoryShot shot = shot_of({true});
+    Settings settings;
+    settings.estimators = parse_estimators("rebuild,input,spatial,nlmeans");
+    settings.outliers.fireflies = false; // Gaussian noise has no fireflies to treat
+    settings.mode_filter.enabled = true;
+    MemorySink sink(shot.size);
+    const Report report = run_denoise(shot, sink, settings, Progress::silent());
+    REQUIRE(report.repeating_noise.counted());
+    REQUIRE_FALSE(report.mode_filter.modes.empty());
+    const ModeFilterChoice& first = report.mode_filter.modes.front();
+    MESSAGE("first mode: noise scale " << first.noise_scale << ", width " << first.width);
+    CHECK(first.noise_scale > kMaximumNoiseScale);
+    CHECK(first.width > 0);
+    double noisy = 0, output = 0;
+    for (int t = 0; t < kFrames; ++t)
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    const size_t i = (static_cast<size_t>(y) * kWidth + x) * 3 + c;
+                    const double clean = picture(t, x, y);
+                    noisy += (shot.frames[size_t(t)][i] - clean) * (shot.frames[size_t(t)][i] - clean);
+                    output += (sink.rebuilt[size_t(t)][i] - clean) * (sink.rebuilt[size_t(t)][i] - clean);
+                }
+    MESSAGE("MSE output / input " << output / noisy);
+    // A 1.5 px Gaussian keeps about 1/(4π·1.5²) = 3.5 % of white noise.
+    CHECK(output < 0.035 * noisy);
 }
