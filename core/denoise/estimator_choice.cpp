@@ -273,7 +273,7 @@ int clipped_window(int width, int height, int x, int y, int radius)
 // pages would cost the kernel's zeroing every time).
 struct Workspace {
     Plane residual, high_pass, variance, below, below_mean, noise_scale, noise_scale_mean;
-    Plane input_rows, input_high_pass, repeating, total_variance; // noise that repeats
+    Plane input_rows, input_high_pass, input_power, total_variance;
     std::array<Plane, 2> blurred;
     std::array<Plane, kEstimators> sure, sure_squared, difference, difference_squared;
     std::array<Plane, kEstimators> sure_mean, sure_square_mean, difference_mean, difference_square_mean,
@@ -433,28 +433,40 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     const Plane& high_pass = work.high_pass;
     Plane& variance = work.variance;
     box_mean(high_pass, height, radius, window_begin, window_end, variance, work.scratch, work.column);
+    // The input's own windowed high-pass power (the same high-pass and window).
+    // Both it and v are the noise plus something: the input's edges, or the
+    // rebuild's misfit, which a rebuild far off puts in the residual, raising v
+    // where it matters most (a larger v lowers a wrong rebuild's SURE and a
+    // blur's, and raises the input's). v is the smaller of the two.
+    Plane& rows = work.input_rows;
+    rows.reset(residual_begin, residual_end, width, channels);
+    for (int y = residual_begin; y < residual_end; ++y)
+        std::copy(input_at(y), input_at(y) + row_samples, rows.row(y));
+    squared_high_pass(rows, height, pass_begin, pass_end, work.input_high_pass);
+    box_mean(work.input_high_pass, height, radius, window_begin, window_end, work.input_power, work.scratch,
+             work.column);
+    for (int y = window_begin; y < window_end; ++y) {
+        float* v = variance.row(y);
+        const float* power = work.input_power.row(y);
+        for (std::int64_t i = 0; i < row_samples; ++i)
+            v[i] = std::min(v[i], power[i]);
+    }
     // Noise that repeats from frame to frame: the rebuild keeps it and the
     // residual does not show it. Its variance per sample is the share that
-    // repeats times the windowed power of the input's own high-pass (the same
-    // window and high-pass as v); every candidate's noise is v plus that.
+    // repeats times the input's windowed high-pass power; every candidate's
+    // noise is v plus that.
     const bool repeating = frame.repeating_share > 0;
     const Plane& total = repeating ? work.total_variance : variance;
     if (repeating) {
-        Plane& rows = work.input_rows;
-        rows.reset(residual_begin, residual_end, width, channels);
-        for (int y = residual_begin; y < residual_end; ++y)
-            std::copy(input_at(y), input_at(y) + row_samples, rows.row(y));
-        squared_high_pass(rows, height, pass_begin, pass_end, work.input_high_pass);
-        box_mean(work.input_high_pass, height, radius, window_begin, window_end, work.repeating, work.scratch,
-                 work.column);
         work.total_variance.reset(window_begin, window_end, width, channels);
         for (int y = window_begin; y < window_end; ++y)
             for (std::int64_t i = 0; i < row_samples; ++i) {
-                float& part = work.repeating.row(y)[i]; // the input's power, then the share of it
+                float& part = work.input_power.row(y)[i]; // the input's power, then the share of it
                 part = static_cast<float>(frame.repeating_share * part);
                 work.total_variance.row(y)[i] = variance.row(y)[i] + part;
             }
     }
+    const Plane& repeating_part = work.input_power;
 
     // Each candidate's value and per-pixel SURE (channel mean) over the window rows.
     std::array<bool, kEstimators> used{true, options.input, options.spatial, options.spatial};
@@ -484,7 +496,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 const double input = input_at(y)[i], v = total.row(y)[i];
                 const double rebuilt = rebuilt_at(y)[i];
                 if (repeating) { // the rebuild keeps the repeating part whole: its slope there is 1
-                    const double part = work.repeating.row(y)[i];
+                    const double part = repeating_part.row(y)[i];
                     pixel_sure[0] +=
                         (rebuilt - input) * (rebuilt - input) - v + 2 * (v - part) * kept_at(y, i) + 2 * part;
                 } else {
@@ -582,7 +594,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                     near_sure[k] = local_sure[k].row(y);
             }
         const float *pooled_sure = sure_mean[0].row(y), *variance_row = total.row(y);
-        const float* repeating_row = repeating ? work.repeating.row(y) : nullptr;
+        const float* repeating_row = repeating ? repeating_part.row(y) : nullptr;
         const float* engine_sigma = frame.sigma + (y - frame.rebuilt_begin) * row_samples;
         const float* below_row = below_test ? work.below_mean.row(y) : nullptr;
         const float* scale_row = below_test ? work.noise_scale_mean.row(y) : nullptr;

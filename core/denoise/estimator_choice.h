@@ -15,7 +15,10 @@
 // Gaussian's centre weight, 1 for the input (S = v). y is the input as read (NaN/Inf cleaned, not fireflies:
 // the temporal firefly clamp hides the rebuild's errors where the light moves). v is the windowed mean of the
 // squared 4-neighbour high-pass of the residual y − rebuild, divided by 1 + 1/k for k neighbours: a mean (not
-// a median), so that v is the variance of the very samples SURE sees. Noise
+// a median), so that v is the variance of the very samples SURE sees; at most
+// the same windowed power of y's own high-pass (each is the noise plus
+// something: the picture's edges, or the misfit of a rebuild that is far off,
+// which would raise v where the rebuild is wrong and hide it). Noise
 // that repeats from frame to frame (repeating_noise.h) is not in the residual:
 // where it is counted, v gains share × the same windowed power of the input's
 // own high-pass, and the rebuild, which keeps that part whole, takes it with

@@ -78,13 +78,14 @@ PassNeeds pass_needs(const Settings& settings, const ShotShape& shape, const Mod
     // Each worker's residual rows (double) of sigma's windows.
     needs.band_images += 4 * tbb::this_task_arena::max_concurrency();
     // The estimator choice: more rows rebuilt around each band (and so read), and
-    // each worker's planes of one frame (about 10 images: estimator_choice.cpp).
+    // each worker's planes of one frame (about 13 images: estimator_choice.cpp; 3 of them the
+    // input's high-pass power that bounds v).
     if (settings.estimators.enabled()) {
         needs.choice_rows = estimator_rebuilt_reach(settings.estimators);
         needs.choice_workers = tbb::this_task_arena::max_concurrency();
         needs.halo_rows =
             std::max(needs.halo_rows + needs.choice_rows, estimator_input_reach(settings.estimators));
-        needs.band_images += 10 * needs.choice_workers;
+        needs.band_images += 13 * needs.choice_workers;
     }
     return needs;
 }

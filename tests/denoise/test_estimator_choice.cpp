@@ -627,3 +627,38 @@ TEST_CASE(
     CHECK(blurred_far > 0);
     CHECK(worst_after < 20 * noise);
 }
+
+TEST_CASE(
+    "estimators: a rebuild whose misfit is busy in space does not hide behind the noise level it raises")
+{
+    // The rebuild misses the wall by ±0.1 in alternate columns (5 noise standard
+    // deviations): its residual's high-pass is mostly that misfit, which would
+    // make the noise level v, taken from it, about 20× the input's noise
+    // variance, and with it the sigma of the blurs and the input taken instead.
+    // v is bounded by the input's own high-pass power.
+    const float noise = 0.02f;
+    WallFrame wall(noise, 31);
+    for (int y = 0; y < wall.height; ++y)
+        for (int x = 0; x < wall.width; ++x)
+            for (int c = 0; c < 3; ++c)
+                wall.rebuilt[wall.at(x, y, c)] = 0.5f + (x % 2 ? 0.1f : -0.1f);
+    std::vector<float> values, sigma;
+    const std::vector<std::uint8_t> chosen = wall.choose(true, &values, "rebuild,input,spatial", &sigma);
+    double input_error = 0, output_error = 0, sigma_squared = 0;
+    int rebuilt = 0;
+    for (size_t i = 0; i < values.size(); ++i) {
+        input_error += (wall.input[i] - 0.5) * (wall.input[i] - 0.5);
+        output_error += (values[i] - 0.5) * (values[i] - 0.5);
+        sigma_squared += double(sigma[i]) * sigma[i];
+    }
+    for (std::uint8_t k : chosen)
+        rebuilt += static_cast<Estimator>(k) == Estimator::Rebuild;
+    const double calibration = std::sqrt(sigma_squared / output_error);
+    MESSAGE("rebuild kept at " << rebuilt << " of " << chosen.size() << " pixels; MSE output / input "
+                               << output_error / input_error << "; RMS(sigma) / RMS(error) " << calibration);
+    CHECK(rebuilt < static_cast<int>(chosen.size()) / 20);
+    CHECK(output_error < input_error);
+    // Sigma: the chosen blurs' own error, not the misfit's (it was 4× too wide).
+    CHECK(calibration > 0.67);
+    CHECK(calibration < 1.5);
+}
