@@ -306,7 +306,7 @@ ModeFilterPlan SureSurvey::finish(int fixed_modes, double noise_scale_cap) const
     for (int j = 0; j < m_modes; ++j) {
         ModeFilterChoice choice;
         // The mode's own noise energy over Σ v_p (1 when nothing is measured),
-        // capped: see kMaximumNoiseScale.
+        // capped at noise_scale_cap (kMaximumNoiseScale unless noise repeats).
         choice.noise_scale = noise > 0 ? std::min(noise_scale_cap, high_pass_energy[j] / noise) : 1.0;
         const double mode_noise = noise * choice.noise_scale;
         choice.unfiltered_sure = mode_noise;  // identity: ‖c − c‖² + 2 Σ v − Σ v

@@ -215,16 +215,12 @@ TEST_CASE("repeating noise: the mode filter's survey counts it, so the rebuild s
     MESSAGE("first mode: noise scale " << first.noise_scale << ", width " << first.width);
     CHECK(first.noise_scale > kMaximumNoiseScale);
     CHECK(first.width > 0);
-    double noisy = 0, output = 0;
+    std::vector<std::vector<float>> truth(kFrames);
     for (int t = 0; t < kFrames; ++t)
         for (int y = 0; y < kHeight; ++y)
             for (int x = 0; x < kWidth; ++x)
-                for (int c = 0; c < 3; ++c) {
-                    const size_t i = (static_cast<size_t>(y) * kWidth + x) * 3 + c;
-                    const double clean = picture(t, x, y);
-                    noisy += (shot.frames[size_t(t)][i] - clean) * (shot.frames[size_t(t)][i] - clean);
-                    output += (sink.rebuilt[size_t(t)][i] - clean) * (sink.rebuilt[size_t(t)][i] - clean);
-                }
+                truth[size_t(t)].insert(truth[size_t(t)].end(), 3, picture(t, x, y));
+    const double noisy = mean_square(shot.frames, truth), output = mean_square(sink.rebuilt, truth);
     MESSAGE("MSE output / input " << output / noisy);
     // A 1.5 px Gaussian keeps about 1/(4π·1.5²) = 3.5 % of white noise.
     CHECK(output < 0.035 * noisy);
