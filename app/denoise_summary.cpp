@@ -104,7 +104,8 @@ nlohmann::ordered_json object_space_json(const DenoiseResult& result)
                               {"widths", points.filter.widths},
                               {"sure", points.filter.risks},
                               {"mean_neighbours", points.filter.mean_neighbours},
-                              {"reasoning", points.filter.reasoning}};
+                              {"reasoning", points.filter.reasoning},
+                              {"seconds", points.filter.seconds}};
     json["solver"] = report.solver;
     add_modes_json(report, json);
     add_time_and_memory_json(report, result.seconds, result.peak_memory_bytes, json);

@@ -107,6 +107,10 @@ struct Report {
     std::vector<double> singular_values;             ///< σ_j, descending
     std::vector<double> explained;                   ///< σ_j² / total energy, per mode
     std::vector<std::vector<double>> temporal_modes; ///< pt(t, j) for j < N: [j][t]
+    /// The weights every frame was rebuilt from (pt smoothed over time, more than
+    /// N with --rank-map): [j][t]. Each rebuilt frame t is Σ_j c_j B(t, j) for
+    /// coefficient images c_j, before --non-negative.
+    std::vector<std::vector<double>> rebuild_weights;
     /// pt(t, j) beyond N for the report's rank slider (Settings::report_modes): [j][t].
     std::vector<std::vector<double>> preview_temporal_modes;
     lowrank::OutlierCounts outliers;

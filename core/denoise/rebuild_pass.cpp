@@ -44,6 +44,11 @@ RebuildBasis chosen_modes(const Settings& settings, const ShotShape& shape, cons
                                             survey.modes, solution.training ? &*solution.training : nullptr,
                                             survey.rank_decision.noise_sigma);
     report.shrinkage = modes.shrinkage;
+    report.rebuild_weights.assign(static_cast<size_t>(modes.temporal.cols()),
+                                  std::vector<double>(static_cast<size_t>(modes.temporal.rows())));
+    for (Eigen::Index j = 0; j < modes.temporal.cols(); ++j)
+        for (Eigen::Index t = 0; t < modes.temporal.rows(); ++t)
+            report.rebuild_weights[static_cast<size_t>(j)][static_cast<size_t>(t)] = modes.temporal(t, j);
     report.weight_smoothing = modes.weight_smoothing;
     return modes;
 }

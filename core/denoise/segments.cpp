@@ -190,6 +190,7 @@ Report merge_reports(const std::vector<Report>& reports)
 {
     Report merged = reports.at(0);
     merged.temporal_modes.clear();
+    merged.rebuild_weights.clear();
     for (size_t k = 1; k < reports.size(); ++k) {
         const Report& part = reports[k];
         merged.shape.frames += part.shape.frames;

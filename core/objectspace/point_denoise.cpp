@@ -3,6 +3,7 @@
 
 #include "core/objectspace/leverage.h"
 
+#include <chrono>
 #include <cstddef>
 #include <vector>
 
@@ -32,7 +33,9 @@ PointDenoise denoise_points(denoise::FrameSource& points, denoise::Settings sett
                           leverages[static_cast<std::size_t>(t)]});
     filter.kept_modes = result.report.rank_decision.kept_modes;
     progress.begin("surface filter and sigma", 1);
-    result.filter = filter_surfaces(samples, filter, shape.channels, frames);
+    const auto start = std::chrono::steady_clock::now();
+    result.filter = filter_surfaces(samples, filter, shape.channels, result.report.rebuild_weights, frames);
+    result.filter.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     progress.end();
     result.over_surfaces = true;
     return result;

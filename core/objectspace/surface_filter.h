@@ -8,7 +8,10 @@
 // to a scene; "no filter" is always a candidate. Points only average with points
 // within the kernel's reach whose normals agree (same surface orientation;
 // surface_neighbours.h), so a box's faces, or a wall and the floor, do not bleed
-// into each other.
+// into each other. The filter runs on the rebuild's coefficients, once for
+// every frame (surface_modes.h), and visits the wide kernels' neighbours cell by
+// cell without listing them (surface_cells.h): its time grows with the points
+// and N, not the frames, and its memory with the points only.
 #pragma once
 
 #include "core/objectspace/surface_samples.h"
@@ -20,19 +23,20 @@ namespace modestack::objectspace {
 
 /// What the SURE survey found.
 struct SurfaceFilterChoice {
-    double width = 0;                ///< chosen Gaussian sigma in spacings (0: no filter)
-    std::vector<double> widths;      ///< candidates, 0 first
-    std::vector<double> risks;       ///< SURE per candidate, per value (same order)
-    double mean_neighbours = 0;      ///< points within reach of the widest kernel, on average
-    std::string reasoning;           ///< one line for the summary
+    double width = 0;           ///< chosen Gaussian sigma in spacings (0: no filter)
+    std::vector<double> widths; ///< candidates, 0 first
+    std::vector<double> risks;  ///< SURE per candidate, per value (same order)
+    double mean_neighbours = 0; ///< points within reach of the widest kernel, on average
+    std::string reasoning;      ///< one line for the summary
+    double seconds = 0;         ///< wall time of the filter and sigma
 };
 
 /// How to filter.
 struct SurfaceFilterOptions {
-    std::vector<double> widths;  ///< candidate Gaussian sigmas, in spacings (0 = none is always tried)
-    bool filter = true;          ///< false: only sigma
-    double window_spacings = 2;  ///< radius of sigma's pooling window, in spacings
-    int kept_modes = 1;          ///< N of the rebuild
+    std::vector<double> widths; ///< candidate Gaussian sigmas, in spacings (0 = none is always tried)
+    bool filter = true;         ///< false: only sigma
+    double window_spacings = 2; ///< radius of sigma's pooling window, in spacings
+    int kept_modes = 1;         ///< N of the rebuild
 };
 
 /// Sigma of every point and frame, as lowrank/confidence.h computes it for
@@ -41,8 +45,11 @@ struct SurfaceFilterOptions {
 /// when asked, the width among 0 and options.widths with the lowest SURE, using
 /// s²·h_t as each rebuilt value's noise variance; every frame is then filtered
 /// in place with it. Sigma after filtering: sqrt(Σ_q H_pq² s_q² h_t + b_t²).
-/// Throws std::invalid_argument without points, frames or a spacing.
-SurfaceFilterChoice filter_surfaces(const SurfaceSamples& samples, const SurfaceFilterOptions& options, int channels,
+/// `rebuild_weights`: the temporal weights the frames were rebuilt from
+/// ([j][t], denoise::Report::rebuild_weights). Throws std::invalid_argument
+/// without points, frames, a spacing or (to filter) weights of the frames' length.
+SurfaceFilterChoice filter_surfaces(const SurfaceSamples& samples, const SurfaceFilterOptions& options,
+                                    int channels, const std::vector<std::vector<double>>& rebuild_weights,
                                     std::vector<SurfaceFrame>& frames);
 
 } // namespace modestack::objectspace

@@ -1,7 +1,8 @@
-// The neighbours of every surface point: the points within a radius (in metres,
-// in the rest pose) whose normals agree, found through a grid of cells as wide
-// as the radius. Each point's list starts with the point itself and runs nearest
-// first, so the neighbours within any smaller radius are a prefix of it.
+// The neighbours of every surface point, listed: the points within a radius (in
+// metres, in the rest pose) whose normals agree, found through the cells of
+// surface_cells.h. Each point's list starts with the point itself and runs
+// nearest first, so the neighbours within any smaller radius are a prefix of it.
+// For narrow radii (sigma's window): a list's length grows with the radius squared.
 #pragma once
 
 #include "core/objectspace/surface_samples.h"

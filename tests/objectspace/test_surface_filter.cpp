@@ -3,8 +3,11 @@
 // white noise, and the rank-1 projection as the rebuild. SURE picks a width that
 // lowers the error, nothing bleeds across the corner (the normals differ), sigma
 // matches the actual error, a clean field is left as it is, and the result does
-// not depend on the thread count.
+// not depend on the thread count; filtering the rebuild's coefficients once
+// equals the Gaussian of every frame, and a correction's part outside the span
+// of the rebuild's weights is kept as it is.
 #include "core/objectspace/surface_filter.h"
+#include "core/objectspace/surface_kernel.h"
 
 #include <doctest/doctest.h>
 #include <tbb/task_arena.h>
@@ -12,6 +15,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <utility>
 #include <vector>
 
 using namespace modestack;
@@ -92,7 +96,7 @@ objectspace::SurfaceFilterChoice filter(Corner& corner, bool filter_on = true)
     options.widths = {0.75, 1.0, 1.5, 2.0, 3.0};
     options.filter = filter_on;
     options.kept_modes = 1;
-    return objectspace::filter_surfaces(corner.samples, options, 1, frames);
+    return objectspace::filter_surfaces(corner.samples, options, 1, {corner.profile}, frames);
 }
 
 double rms_error(const Corner& corner, const std::vector<std::vector<float>>& values)
@@ -175,4 +179,55 @@ TEST_CASE("surface filter: a clean field is not filtered and keeps its values, a
     before = off.rebuilt;
     CHECK(filter(off, false).width == 0);
     CHECK(off.rebuilt == before);
+}
+
+TEST_CASE("surface filter: filtering the coefficients once is filtering every frame, and what lies outside "
+          "the weights stays as it is")
+{
+    Corner corner = make_corner(kNoise);
+    // A correction outside the rank-1 span (as --non-negative makes) on a few points of frame 5.
+    std::vector<std::vector<float>> outside(kFrames, std::vector<float>(corner.truth.size(), 0.0f));
+    for (std::size_t p = 0; p < corner.truth.size(); p += 97)
+        outside[5][p] = 0.5f, corner.rebuilt[5][p] += 0.5f;
+    const std::vector<std::vector<float>> rebuilt = corner.rebuilt;
+    const objectspace::SurfaceFilterChoice choice = filter(corner);
+    REQUIRE(choice.width > 0);
+    // Frame by frame, the Gaussian of the chosen width over the brute-force
+    // neighbours (normals agreeing) of each value's part in the span of the
+    // weights (c_q Q_t), plus its own part outside that span as it was.
+    const double sigma = choice.width * kSpacing, reach = objectspace::kReachInSigmas * sigma;
+    const float* x = corner.samples.positions.data();
+    const float* n = corner.samples.normals.data();
+    const std::size_t points = corner.truth.size();
+    std::vector<double> coefficient(points, 0.0);
+    for (std::size_t p = 0; p < points; ++p)
+        for (int t = 0; t < kFrames; ++t)
+            coefficient[p] += rebuilt[t][p] * corner.profile[t];
+    double worst = 0, largest_outside = 0;
+    for (std::size_t p = 0; p < points; ++p) {
+        std::vector<std::pair<std::size_t, double>> weights;
+        double total = 0;
+        for (std::size_t q = 0; q < points; ++q) {
+            const float cosine =
+                n[3 * p] * n[3 * q] + n[3 * p + 1] * n[3 * q + 1] + n[3 * p + 2] * n[3 * q + 2];
+            const float ex = x[3 * p] - x[3 * q], ey = x[3 * p + 1] - x[3 * q + 1],
+                        ez = x[3 * p + 2] - x[3 * q + 2];
+            const float d2 = ex * ex + ey * ey + ez * ez;
+            if (q != p && (cosine < 0.9f || d2 > static_cast<float>(reach * reach)))
+                continue;
+            const double weight = q == p ? 1.0 : std::exp(-0.5 * d2 / (sigma * sigma));
+            weights.emplace_back(q, weight), total += weight;
+        }
+        for (int t = 0; t < kFrames; ++t) {
+            const double own_outside = rebuilt[t][p] - coefficient[p] * corner.profile[t];
+            largest_outside = std::max(largest_outside, std::abs(own_outside));
+            double expected = own_outside;
+            for (const auto& [q, weight] : weights)
+                expected += weight / total * coefficient[q] * corner.profile[t];
+            worst = std::max(worst, std::abs(expected - corner.rebuilt[t][p]));
+        }
+    }
+    CHECK(largest_outside > 0.4); // the correction is mostly outside the span
+    MESSAGE("width " << choice.width << ": largest difference from the frame-by-frame filter " << worst);
+    CHECK(worst < 1e-5);
 }

@@ -3,8 +3,10 @@
 // matters) and a few with tilted normals; every point's list is itself first,
 // then exactly the points within the radius whose normals agree, nearest first;
 // count_within is a prefix; and the lists do not depend on the thread count.
-// Then the Gaussian kernel over them: p first and heaviest, weights falling with
-// distance, cut at kReachInSigmas, summing to 1.
+// The cells (the wide kernels' visits) give the same neighbours, each point
+// visited once, independent of the threads. The Gaussian: 1 at the point,
+// falling with distance, cut at kReachInSigmas.
+#include "core/objectspace/surface_cells.h"
 #include "core/objectspace/surface_kernel.h"
 #include "core/objectspace/surface_neighbours.h"
 
@@ -117,26 +119,58 @@ TEST_CASE("surface neighbours: the same lists for 1 and 2 threads")
     CHECK(one == two);
 }
 
-TEST_CASE("surface kernel: p first and heaviest, falling with distance, cut at its reach, summing to 1")
+TEST_CASE("surface cells: every point visited once with exactly the brute-force neighbours, itself first")
 {
-    const SurfaceSamples samples = random_box_faces(2000, 7);
-    const double width = 0.5, spacing = samples.spacing, sigma = width * spacing;
-    const SurfaceNeighbours neighbours(samples, objectspace::kReachInSigmas * sigma * 1.5, kMinCosine);
-    std::vector<double> weights;
-    for (std::int64_t p = 0; p < samples.count(); p += 37) {
-        objectspace::gaussian_weights(neighbours, p, width, spacing, weights);
-        const float* d2 = neighbours.distances_squared(p);
-        double sum = 0;
-        for (std::size_t n = 0; n < weights.size(); ++n) {
-            sum += weights[n];
-            if (n > 0) {
-                CHECK(weights[n] <= weights[n - 1]);
-                CHECK(weights[n] / weights[0] == doctest::Approx(std::exp(-0.5 * d2[n] / (sigma * sigma))));
-            }
-        }
-        CHECK(sum == doctest::Approx(1.0).epsilon(1e-12));
-        // Exactly the neighbours within the reach (the list goes further).
-        CHECK(weights.size() == static_cast<std::size_t>(
-                                    neighbours.count_within(p, objectspace::kReachInSigmas * sigma)));
+    const SurfaceSamples samples = random_box_faces(1500, 9);
+    const double radius = 0.09;
+    const objectspace::SurfaceCells cells(samples, radius, kMinCosine);
+    std::vector<std::vector<std::pair<float, std::int64_t>>> seen(static_cast<std::size_t>(samples.count()));
+    std::vector<int> visits(static_cast<std::size_t>(samples.count()), 0);
+    cells.for_each_point([&](std::int64_t p, const std::vector<objectspace::SurfaceNeighbour>& neighbours) {
+        ++visits[static_cast<std::size_t>(p)];
+        REQUIRE(!neighbours.empty());
+        CHECK(neighbours.front().id == p);
+        for (const objectspace::SurfaceNeighbour& neighbour : neighbours)
+            seen[static_cast<std::size_t>(p)].emplace_back(neighbour.distance_squared, neighbour.id);
+    });
+    std::int64_t total = 0;
+    for (std::int64_t p = 0; p < samples.count(); ++p) {
+        CHECK(visits[static_cast<std::size_t>(p)] == 1);
+        auto got = seen[static_cast<std::size_t>(p)];
+        std::sort(got.begin() + 1, got.end()); // the cells' order is theirs; the set is the test
+        CHECK(got == brute_force(samples, p, radius));
+        total += static_cast<std::int64_t>(got.size());
     }
+    CHECK(static_cast<double>(total) / samples.count() > 3); // points have neighbours
+}
+
+TEST_CASE("surface cells: the same neighbours in the same order for 1 and 2 threads")
+{
+    const SurfaceSamples samples = random_box_faces(3000, 5);
+    auto lists = [&] {
+        std::vector<std::vector<std::int64_t>> out(static_cast<std::size_t>(samples.count()));
+        objectspace::SurfaceCells(samples, 0.07, kMinCosine)
+            .for_each_point(
+                [&](std::int64_t p, const std::vector<objectspace::SurfaceNeighbour>& neighbours) {
+                    for (const objectspace::SurfaceNeighbour& neighbour : neighbours)
+                        out[static_cast<std::size_t>(p)].push_back(neighbour.id);
+                });
+        return out;
+    };
+    std::vector<std::vector<std::int64_t>> one, two;
+    tbb::task_arena(1).execute([&] { one = lists(); });
+    tbb::task_arena(2).execute([&] { two = lists(); });
+    CHECK(one == two);
+}
+
+TEST_CASE("surface kernel: 1 at the point, a Gaussian of the distance, cut at its reach")
+{
+    const double width = 0.5, spacing = 0.05, sigma = width * spacing;
+    const objectspace::SurfaceGaussian gaussian = objectspace::surface_gaussian(width, spacing);
+    CHECK(gaussian.weight(0.0f) == 1.0);
+    for (double distance : {0.3 * sigma, sigma, 2 * sigma, 2.99 * sigma})
+        CHECK(gaussian.weight(static_cast<float>(distance * distance)) ==
+              doctest::Approx(std::exp(-0.5 * distance * distance / (sigma * sigma))).epsilon(1e-6));
+    const double reach = objectspace::kReachInSigmas * sigma;
+    CHECK(gaussian.weight(static_cast<float>(1.01 * reach * 1.01 * reach)) == 0.0);
 }
