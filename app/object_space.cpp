@@ -1,6 +1,7 @@
 // The wiring of object-space denoising (see object_space.h).
 #include "app/object_space.h"
 
+#include "app/memory_budget.h"
 #include "app/sequence_adapters.h"
 #include "core/common/error.h"
 #include "core/objectspace/point_denoise.h"
@@ -10,6 +11,7 @@
 
 #include <fmt/format.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <memory>
@@ -93,6 +95,19 @@ std::unique_ptr<io::SequenceReader> open_lookup(const io::FrameSequence& frames,
     return lookup;
 }
 
+// What one frame rebuilt from the points holds at once: its lookup, layer and
+// sigma as floats, its point image's values and sigma, and its other channels,
+// which the output carries over (read whole, then encoded).
+std::int64_t output_frame_bytes(const io::SequenceReader& frames, const io::SequenceReader& points)
+{
+    const std::int64_t pixels = static_cast<std::int64_t>(frames.width()) * frames.height();
+    const std::int64_t all_channels = static_cast<std::int64_t>(frames.channel_names(0).size());
+    const std::int64_t channels = frames.selected_channel_count();
+    const std::int64_t point_values = static_cast<std::int64_t>(points.width()) * points.height() * channels;
+    return static_cast<std::int64_t>(sizeof(float)) *
+           (pixels * (kLookupChannels + 2 * channels + 2 * all_channels) + 3 * point_values);
+}
+
 } // namespace
 
 ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings settings, Progress& progress)
@@ -124,6 +139,20 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
     filter.window_spacings = std::max(1, job.sigma_radius);
     const objectspace::SurfaceSamples samples =
         read_surface_samples(point_files, result.points, header.spacing, job.exr_codec);
+    SequenceSink sink(frame_reader, job.outputs, "");
+    sink.set_part_layout(job.part_layout);
+    sink.set_output_format(job.output_format);
+    // The budget is the whole process's, as for images: less what it holds
+    // already, the points files' decoders, the outputs' buffers and what each
+    // frame rebuilt at once holds after the engine (output_frame_bytes).
+    settings.max_memory_bytes =
+        engine_memory_budget(settings.max_memory_bytes, point_reader, sink.open_output_bytes()) -
+        tbb::this_task_arena::max_concurrency() * output_frame_bytes(frame_reader, point_reader);
+    if (settings.max_memory_bytes <= 0)
+        throw usage_error(
+            fmt::format("--max-memory is too small for object space: rebuilding {} frames at once "
+                        "alone takes more",
+                        tbb::this_task_arena::max_concurrency()));
     objectspace::PointDenoise denoised =
         objectspace::denoise_points(point_source, settings, samples, filter, progress);
     result.report = std::move(denoised.report);
@@ -133,9 +162,6 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
                                   "the point image's and the points are not filtered over the surfaces",
                                   point_files.files.front()));
 
-    SequenceSink sink(frame_reader, job.outputs, "");
-    sink.set_part_layout(job.part_layout);
-    sink.set_output_format(job.output_format);
     std::vector<io::HeaderAttribute> attributes = job.attributes;
     attributes.push_back(io::HeaderAttribute::of_text("modestack:object_space", point_files.printf_pattern));
     attributes.push_back(io::HeaderAttribute::of_integer("modestack:points", result.points));
@@ -151,11 +177,13 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
             return;
         }
         std::vector<float> lookup(pixels * kLookupChannels), rebuilt(pixels * channels), sigma(pixels * channels);
+        std::vector<float> point_values(static_cast<std::size_t>(denoised.frame_values())),
+            point_sigma(point_values.size());
+        denoised.frame(frame, point_values.data(), point_sigma.data());
         lookup_reader->read_selected(frame, 0, frame_reader.height(), lookup.data());
-        objectspace::rebuild_from_points(lookup.data(), pixels, denoised.points.values(frame),
-                                         denoised.points.sigma(frame), channels, result.points,
-                                         job.frames.files[static_cast<std::size_t>(frame)], rebuilt.data(),
-                                         sigma.data());
+        objectspace::rebuild_from_points(
+            lookup.data(), pixels, point_values.data(), point_sigma.data(), channels, result.points,
+            job.frames.files[static_cast<std::size_t>(frame)], rebuilt.data(), sigma.data());
         sink.write_rows(frame, 0, frame_reader.height(), rebuilt.data(), sigma.data(), nullptr);
         progress.advance(1);
     });

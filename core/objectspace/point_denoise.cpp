@@ -1,13 +1,82 @@
 // Denoising the points × frames matrix (see point_denoise.h).
 #include "core/objectspace/point_denoise.h"
 
+#include "core/common/error.h"
 #include "core/objectspace/leverage.h"
+
+#include <fmt/format.h>
+#include <tbb/enumerable_thread_specific.h>
 
 #include <chrono>
 #include <cstddef>
+#include <optional>
 #include <vector>
 
 namespace modestack::objectspace {
+
+struct PointDenoise::Held {
+    Held(denoise::FrameSource& points, bool keep_input, bool keep_sigma)
+        : source(points), shape(points.shape()), store(shape, keep_sigma)
+    {
+        if (keep_input)
+            kept.emplace(points);
+    }
+    denoise::FrameSource& source;
+    denoise::ShotShape shape;
+    std::optional<KeepingSource> kept; // the engine's input, when it fits
+    PointStore store;
+    SurfaceShot shot;
+    std::optional<SurfaceFilter> filter;
+    mutable tbb::enumerable_thread_specific<std::vector<float>> noisy_of_worker;
+
+    std::int64_t frame_values() const
+    {
+        return static_cast<std::int64_t>(shape.width) * shape.height * shape.channels;
+    }
+    void read_noisy(int t, float* destination) const
+    {
+        if (kept) {
+            const float* frame = kept->frame(t);
+            std::copy(frame, frame + frame_values(), destination);
+        } else {
+            source.read_rows(t, 0, shape.height, destination, nullptr);
+        }
+    }
+};
+
+PointDenoise::PointDenoise() = default;
+PointDenoise::PointDenoise(PointDenoise&&) noexcept = default;
+PointDenoise::~PointDenoise() = default;
+
+std::int64_t PointDenoise::frame_values() const
+{
+    return held->frame_values();
+}
+
+void PointDenoise::frame(int t, float* values, float* sigma) const
+{
+    const Held& points = *held;
+    const std::size_t all = static_cast<std::size_t>(points.frame_values());
+    const float* rebuilt = points.store.values(t);
+    if (!points.filter) { // the engine's values and sigma over the point image
+        std::copy(rebuilt, rebuilt + all, values);
+        std::copy(points.store.sigma(t), points.store.sigma(t) + all, sigma);
+        return;
+    }
+    // Padding points past the samples' keep their rebuilt value and no sigma.
+    std::copy(rebuilt, rebuilt + all, values);
+    std::fill(sigma, sigma + all, 0.0f);
+    const float* noisy = nullptr;
+    if (points.kept) {
+        noisy = points.kept->frame(t);
+    } else {
+        std::vector<float>& buffer = points.noisy_of_worker.local();
+        buffer.resize(all);
+        points.read_noisy(t, buffer.data());
+        noisy = buffer.data();
+    }
+    points.filter->frame(t, noisy, values, sigma);
+}
 
 PointDenoise denoise_points(denoise::FrameSource& points, denoise::Settings settings, const SurfaceSamples& samples,
                             SurfaceFilterOptions filter, Progress& progress)
@@ -18,23 +87,41 @@ PointDenoise denoise_points(denoise::FrameSource& points, denoise::Settings sett
     settings.feature_guide.kinds.clear();
     settings.rank_map.enabled = false;
     settings.sigma_radius = 0;
-    KeepingSource noisy(points); // every row is read: pass 1 needs them all for the statistics
-    PointDenoise result{PointStore(shape), {}, {}, false};
-    result.report = denoise::run_denoise(noisy, result.points, settings, progress);
-    if (samples.count() == 0 || !(samples.spacing > 0))
+    const bool over_surfaces = samples.count() > 0 && samples.spacing > 0;
+    const std::int64_t matrix_bytes = static_cast<std::int64_t>(shape.width) * shape.height * shape.channels *
+                                      shape.frames * static_cast<std::int64_t>(sizeof(float));
+    const std::int64_t kept_bytes =
+        matrix_bytes * (over_surfaces ? 1 : 2); // the rebuild (and the engine's sigma)
+    if (2 * kept_bytes > settings.max_memory_bytes)
+        throw usage_error(
+            fmt::format("--max-memory leaves {} MiB for the points, too little for object space: the "
+                        "rebuilt points alone hold {} MiB, and the engine needs as much again",
+                        settings.max_memory_bytes >> 20, (kept_bytes >> 20) + 1));
+    const bool keep_input = over_surfaces && 3 * matrix_bytes <= settings.max_memory_bytes;
+    settings.max_memory_bytes -= kept_bytes + (keep_input ? matrix_bytes : 0);
+
+    PointDenoise result;
+    result.held = std::make_unique<PointDenoise::Held>(points, keep_input, !over_surfaces);
+    PointDenoise::Held& held = *result.held;
+    result.input_kept = keep_input;
+    denoise::FrameSource& engine_input = keep_input ? static_cast<denoise::FrameSource&>(*held.kept) : points;
+    result.report = denoise::run_denoise(engine_input, held.store, settings, progress);
+    if (!over_surfaces)
         return result;
 
     // Sigma (and the filter) over the surfaces: the engine's sigma pooled over a
     // point image's rows, which are not surface neighbours.
-    const std::vector<double> leverages = frame_leverages(result.report.temporal_modes, shape.frames);
-    std::vector<SurfaceFrame> frames;
+    held.shot.read_noisy = [&held](int t, float* destination) { held.read_noisy(t, destination); };
     for (int t = 0; t < shape.frames; ++t)
-        frames.push_back({noisy.frame(t), result.points.values(t), result.points.sigma(t),
-                          leverages[static_cast<std::size_t>(t)]});
+        held.shot.rebuilt.push_back(held.store.values(t));
+    held.shot.leverages = frame_leverages(result.report.temporal_modes, shape.frames);
+    held.shot.channels = shape.channels;
+    held.shot.frame_values = held.frame_values();
     filter.kept_modes = result.report.rank_decision.kept_modes;
     progress.begin("surface filter and sigma", 1);
     const auto start = std::chrono::steady_clock::now();
-    result.filter = filter_surfaces(samples, filter, shape.channels, result.report.rebuild_weights, frames);
+    held.filter.emplace(samples, filter, result.report.rebuild_weights, held.shot);
+    result.filter = held.filter->choice();
     result.filter.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     progress.end();
     result.over_surfaces = true;

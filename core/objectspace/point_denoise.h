@@ -15,21 +15,41 @@
 #include "core/objectspace/surface_filter.h"
 #include "core/objectspace/surface_samples.h"
 
+#include <cstdint>
+#include <memory>
+
 namespace modestack::objectspace {
 
-/// What denoising the points gave.
-struct PointDenoise {
-    PointStore points;           ///< every point's value and sigma in every frame
+/// What denoising the points gave: every frame's points, made on demand.
+class PointDenoise {
+public:
     denoise::Report report;      ///< the engine's, on the point image
     SurfaceFilterChoice filter;  ///< what the surface filter chose (width 0: none)
     bool over_surfaces = false;  ///< whether sigma and the filter went over the surfaces
+    bool input_kept = false;     ///< the engine's input was kept in memory (else read again per frame)
+
+    /// Frame t's point values and sigma, [point][channel] over the whole point
+    /// image (frame_values() floats each). May be called concurrently for
+    /// different frames; reads the points' frame again unless input_kept.
+    void frame(int t, float* values, float* sigma) const;
+    std::int64_t frame_values() const;
+
+    PointDenoise();
+    PointDenoise(PointDenoise&&) noexcept;
+    ~PointDenoise();
+    struct Held; ///< the kept matrices and the filter, where frame() finds them
+    std::unique_ptr<Held> held;
 };
 
 /// Denoises `points` (a point image per frame) with `settings` less their
 /// spatial parts. When `samples` has positions, normals and a spacing, sigma is
 /// then pooled over the surfaces and the points are filtered as `filter` says
 /// (its rank is set here to the engine's N); otherwise the engine's sigma over
-/// the point image stays and nothing is filtered.
+/// the point image stays and nothing is filtered. The rebuild is kept in
+/// memory, and the input too when three times the rebuild fits
+/// settings.max_memory_bytes; the engine gets the rest of the budget. `points`
+/// must outlive the result (frame() reads it again). Throws a usage error when
+/// the budget cannot hold the rebuild and as much again for the engine.
 PointDenoise denoise_points(denoise::FrameSource& points, denoise::Settings settings, const SurfaceSamples& samples,
                             SurfaceFilterOptions filter, Progress& progress);
 

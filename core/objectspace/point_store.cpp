@@ -18,11 +18,12 @@ void KeepingSource::read_rows(int frame_index, int row_begin, int row_end, float
               m_rows[static_cast<std::size_t>(frame_index)].begin() + row_values() * row_begin);
 }
 
-PointStore::PointStore(denoise::ShotShape shape) : m_shape(shape)
+PointStore::PointStore(denoise::ShotShape shape, bool keep_sigma) : m_shape(shape)
 {
     const std::size_t values = static_cast<std::size_t>(shape.width) * shape.height * shape.channels;
     m_values.assign(static_cast<std::size_t>(shape.frames), std::vector<float>(values, 0.0f));
-    m_sigma = m_values;
+    if (keep_sigma)
+        m_sigma = m_values;
 }
 
 void PointStore::write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt,
@@ -32,7 +33,8 @@ void PointStore::write_rows(int frame_index, int row_begin, int row_end, const f
     const std::size_t first = static_cast<std::size_t>(row_begin) * row_values;
     const std::size_t count = static_cast<std::size_t>(row_end - row_begin) * row_values;
     std::copy(rebuilt, rebuilt + count, m_values[static_cast<std::size_t>(frame_index)].begin() + first);
-    std::copy(sigma, sigma + count, m_sigma[static_cast<std::size_t>(frame_index)].begin() + first);
+    if (!m_sigma.empty())
+        std::copy(sigma, sigma + count, m_sigma[static_cast<std::size_t>(frame_index)].begin() + first);
 }
 
 } // namespace modestack::objectspace

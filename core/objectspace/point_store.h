@@ -1,8 +1,9 @@
-// Both ends of the points × frames matrix kept in memory for object space: the
-// engine's noisy input (the residuals the surface filter and sigma need after
-// the rebuild, without reading the points files a second time) and its rebuild
-// and sigma (filtered in place, then looked up by every pixel of every frame).
-// A shot's points are few next to its pixels, so all of them are kept.
+// The points × frames matrix kept in memory for object space: the engine's
+// rebuild (the surface filter works from it, frame by frame) and, when the
+// memory budget holds it, the engine's noisy input (the residuals the noise
+// level and sigma need after the rebuild, without reading the points files
+// again). The engine's own sigma is kept only where no surface filter replaces
+// it (points without positions and normals).
 #pragma once
 
 #include "core/denoise/frame_stream.h"
@@ -31,12 +32,19 @@ private:
 /// The engine's result for every point and frame, kept in memory.
 class PointStore : public denoise::FrameSink {
 public:
-    explicit PointStore(denoise::ShotShape shape);
+    /// `keep_sigma`: also keep the engine's sigma (else sigma(t) is null).
+    PointStore(denoise::ShotShape shape, bool keep_sigma);
     void write_rows(int frame_index, int row_begin, int row_end, const float* rebuilt, const float* sigma,
                     const denoise::PassThroughRows* pass_through) override;
     /// Frame `frame_index`'s values and sigma, [point][channel] (padding points at the end).
-    float* values(int frame_index) { return m_values[static_cast<std::size_t>(frame_index)].data(); }
-    float* sigma(int frame_index) { return m_sigma[static_cast<std::size_t>(frame_index)].data(); }
+    const float* values(int frame_index) const
+    {
+        return m_values[static_cast<std::size_t>(frame_index)].data();
+    }
+    const float* sigma(int frame_index) const
+    {
+        return m_sigma.empty() ? nullptr : m_sigma[static_cast<std::size_t>(frame_index)].data();
+    }
 
 private:
     denoise::ShotShape m_shape;

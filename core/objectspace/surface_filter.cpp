@@ -9,6 +9,7 @@
 #include "core/objectspace/surface_sure.h"
 
 #include <fmt/format.h>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -67,94 +68,102 @@ FilteredModes filter_modes(const SurfaceCells& cells, const SurfaceModes& modes,
     return filtered;
 }
 
-// Frame t filtered (when `filtered` is given: its rebuilt value less its part in
-// the basis plus that part filtered) and its sigma = sqrt(Σ H² s² h_t + b_t²),
-// with b_t² = max(0, μ_t² − s²(1 − h_t)/|W|), μ_t the window's mean residual.
-void filter_frame(const SurfaceNeighbours& window_neighbours, double window, const std::vector<double>& noise,
-                  const SurfaceModes& modes, const FilteredModes* filtered, int t, int channels,
-                  SurfaceFrame& frame)
-{
-    const std::int64_t count = window_neighbours.count();
-    const std::size_t ch = static_cast<std::size_t>(channels);
-    const std::vector<float> rebuilt(frame.values, frame.values + count * ch);
-    auto residual_of = [&](std::int64_t q, std::size_t c) {
-        return static_cast<double>(frame.noisy[q * ch + c]) - rebuilt[q * ch + c];
-    };
-    const double h = frame.leverage;
-    const int n = modes.count();
-    for (std::int64_t p = 0; p < count; ++p) {
-        const std::int64_t* ids = window_neighbours.ids(p);
-        const int members = window_neighbours.count_within(p, window);
-        for (std::size_t c = 0; c < ch; ++c) {
-            double value = rebuilt[p * ch + c], kept_noise = noise[p * ch + c];
-            if (filtered) {
-                const double* own = modes.of(p);
-                const double* smooth = filtered->coefficients.data() + static_cast<std::size_t>(p) * n * ch;
-                for (int j = 0; j < n; ++j)
-                    value += (smooth[j * ch + c] - own[j * ch + c]) * modes.basis(t, j);
-                kept_noise = filtered->kept_noise[p * ch + c];
-            }
-            double mean_residual = 0;
-            for (int m = 0; m < members; ++m)
-                mean_residual += residual_of(ids[m], c);
-            mean_residual /= members;
-            const double bias =
-                std::max(0.0, mean_residual * mean_residual - noise[p * ch + c] * (1 - h) / members);
-            frame.values[p * ch + c] = static_cast<float>(value);
-            frame.sigma[p * ch + c] = static_cast<float>(std::sqrt(kept_noise * h + bias));
-        }
-    }
-}
-
 } // namespace
 
-SurfaceFilterChoice filter_surfaces(const SurfaceSamples& samples, const SurfaceFilterOptions& options,
-                                    int channels, const std::vector<std::vector<double>>& rebuild_weights,
-                                    std::vector<SurfaceFrame>& frames)
+struct SurfaceFilter::State {
+    State(const SurfaceSamples& samples, double window_radius, const SurfaceShot& shot)
+        : window(window_radius), window_neighbours(samples, window_radius, kMinNormalCosine), shot(shot)
+    {
+    }
+    double window;
+    SurfaceNeighbours window_neighbours;
+    const SurfaceShot& shot;
+    std::vector<double> noise; // s² per point and channel
+    SurfaceModes modes;
+    std::optional<FilteredModes> filtered; // none: width 0
+};
+
+SurfaceFilter::SurfaceFilter(const SurfaceSamples& samples, const SurfaceFilterOptions& options,
+                             const std::vector<std::vector<double>>& rebuild_weights, const SurfaceShot& shot)
 {
-    SurfaceFilterChoice choice;
-    choice.widths.push_back(0);
+    m_choice.widths.push_back(0);
     if (options.filter)
         for (double width : options.widths)
             if (width > 0)
-                choice.widths.push_back(width);
-    if (samples.count() == 0 || frames.empty() || !(samples.spacing > 0))
-        throw std::invalid_argument("filter_surfaces: no points, frames or spacing");
+                m_choice.widths.push_back(width);
+    if (samples.count() == 0 || shot.frames() == 0 || !(samples.spacing > 0))
+        throw std::invalid_argument("SurfaceFilter: no points, frames or spacing");
     const double spacing = samples.spacing;
-    const double window = options.window_spacings * spacing;
-    const SurfaceNeighbours window_neighbours(samples, window, kMinNormalCosine);
-    const std::vector<double> noise =
-        surface_noise_variance(window_neighbours, window, frames, channels, options.kept_modes);
+    m_state = std::make_unique<State>(samples, options.window_spacings * spacing, shot);
+    State& state = *m_state;
+    state.noise = surface_noise_variance(state.window_neighbours, state.window, shot, options.kept_modes);
 
-    SurfaceModes modes;
     std::optional<SurfaceCells> cells;
-    choice.risks.assign(1, 0.0);
-    choice.mean_neighbours = window_neighbours.mean_size();
-    if (choice.widths.size() > 1) {
+    m_choice.risks.assign(1, 0.0);
+    m_choice.mean_neighbours = state.window_neighbours.mean_size();
+    if (m_choice.widths.size() > 1) {
         if (rebuild_weights.empty())
-            throw std::invalid_argument("filter_surfaces: no rebuild weights to filter with");
-        modes = project_on_weights(rebuild_weights, frames, samples.count(), channels);
+            throw std::invalid_argument("SurfaceFilter: no rebuild weights to filter with");
+        state.modes = project_on_weights(rebuild_weights, shot, samples.count());
         double leverage_sum = 0;
-        for (const SurfaceFrame& frame : frames)
-            leverage_sum += frame.leverage;
-        const double widest = *std::max_element(choice.widths.begin(), choice.widths.end());
+        for (double leverage : shot.leverages)
+            leverage_sum += leverage;
+        const double widest = *std::max_element(m_choice.widths.begin(), m_choice.widths.end());
         cells.emplace(samples, kReachInSigmas * widest * spacing, kMinNormalCosine);
-        choice.risks = surface_sure_risks(*cells, spacing, choice.widths, noise, modes, leverage_sum,
-                                          static_cast<int>(frames.size()), choice.mean_neighbours);
+        m_choice.risks = surface_sure_risks(*cells, spacing, m_choice.widths, state.noise, state.modes,
+                                            leverage_sum, shot.frames(), m_choice.mean_neighbours);
     }
-    const int best =
-        static_cast<int>(std::min_element(choice.risks.begin(), choice.risks.end()) - choice.risks.begin());
-    choice.width = choice.widths[best];
-    choice.reasoning = reasoning_of(choice, options.filter, best, spacing);
+    const int best = static_cast<int>(std::min_element(m_choice.risks.begin(), m_choice.risks.end()) -
+                                      m_choice.risks.begin());
+    m_choice.width = m_choice.widths[best];
+    m_choice.reasoning = reasoning_of(m_choice, options.filter, best, spacing);
+    if (m_choice.width > 0)
+        state.filtered.emplace(filter_modes(*cells, state.modes, state.noise, m_choice.width, spacing));
+}
 
-    std::optional<FilteredModes> filtered;
-    if (choice.width > 0)
-        filtered.emplace(filter_modes(*cells, modes, noise, choice.width, spacing));
-    tbb::parallel_for(0, static_cast<int>(frames.size()), [&](int t) {
-        filter_frame(window_neighbours, window, noise, modes, filtered ? &*filtered : nullptr, t, channels,
-                     frames[t]);
-    });
-    return choice;
+SurfaceFilter::~SurfaceFilter() = default;
+
+// The rebuilt value less its part in the basis plus that part filtered, and
+// sigma with b_t² = max(0, μ_t² − s²(1 − h_t)/|W|), μ_t the window's mean residual.
+void SurfaceFilter::frame(int t, const float* noisy, float* values, float* sigma) const
+{
+    const State& state = *m_state;
+    const SurfaceNeighbours& window_neighbours = state.window_neighbours;
+    const std::int64_t count = window_neighbours.count();
+    const std::size_t ch = static_cast<std::size_t>(state.shot.channels);
+    const float* rebuilt = state.shot.rebuilt[static_cast<std::size_t>(t)];
+    auto residual_of = [&](std::int64_t q, std::size_t c) {
+        return static_cast<double>(noisy[q * ch + c]) - rebuilt[q * ch + c];
+    };
+    const double h = state.shot.leverages[static_cast<std::size_t>(t)];
+    const int n = state.modes.count();
+    const FilteredModes* filtered = state.filtered ? &*state.filtered : nullptr;
+    tbb::parallel_for(
+        tbb::blocked_range<std::int64_t>(0, count), [&](const tbb::blocked_range<std::int64_t>& range) {
+            for (std::int64_t p = range.begin(); p != range.end(); ++p) {
+                const std::int64_t* ids = window_neighbours.ids(p);
+                const int members = window_neighbours.count_within(p, state.window);
+                for (std::size_t c = 0; c < ch; ++c) {
+                    double value = rebuilt[p * ch + c], kept_noise = state.noise[p * ch + c];
+                    if (filtered) {
+                        const double* own = state.modes.of(p);
+                        const double* smooth =
+                            filtered->coefficients.data() + static_cast<std::size_t>(p) * n * ch;
+                        for (int j = 0; j < n; ++j)
+                            value += (smooth[j * ch + c] - own[j * ch + c]) * state.modes.basis(t, j);
+                        kept_noise = filtered->kept_noise[p * ch + c];
+                    }
+                    double mean_residual = 0;
+                    for (int m = 0; m < members; ++m)
+                        mean_residual += residual_of(ids[m], c);
+                    mean_residual /= members;
+                    const double bias = std::max(0.0, mean_residual * mean_residual -
+                                                          state.noise[p * ch + c] * (1 - h) / members);
+                    values[p * ch + c] = static_cast<float>(value);
+                    sigma[p * ch + c] = static_cast<float>(std::sqrt(kept_noise * h + bias));
+                }
+            }
+        });
 }
 
 } // namespace modestack::objectspace

@@ -16,6 +16,7 @@
 
 #include "core/objectspace/surface_samples.h"
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -39,17 +40,37 @@ struct SurfaceFilterOptions {
     int kept_modes = 1;         ///< N of the rebuild
 };
 
-/// Sigma of every point and frame, as lowrank/confidence.h computes it for
-/// pixels but pooled over the surface neighbours within the window instead of
-/// an image window (a point image's neighbours are not the surface's), and,
-/// when asked, the width among 0 and options.widths with the lowest SURE, using
-/// s²·h_t as each rebuilt value's noise variance; every frame is then filtered
-/// in place with it. Sigma after filtering: sqrt(Σ_q H_pq² s_q² h_t + b_t²).
-/// `rebuild_weights`: the temporal weights the frames were rebuilt from
-/// ([j][t], denoise::Report::rebuild_weights). Throws std::invalid_argument
-/// without points, frames, a spacing or (to filter) weights of the frames' length.
-SurfaceFilterChoice filter_surfaces(const SurfaceSamples& samples, const SurfaceFilterOptions& options,
-                                    int channels, const std::vector<std::vector<double>>& rebuild_weights,
-                                    std::vector<SurfaceFrame>& frames);
+/// The surface filter of one shot: built once (the noise level from every
+/// frame's residual, the width SURE chooses, the filtered coefficients), then
+/// asked for any frame's filtered values and sigma.
+class SurfaceFilter {
+public:
+    /// Sigma as lowrank/confidence.h computes it for pixels but pooled over the
+    /// surface neighbours within the window instead of an image window (a point
+    /// image's neighbours are not the surface's), and, when asked, the width
+    /// among 0 and options.widths with the lowest SURE, using s²·h_t as each
+    /// rebuilt value's noise variance. `rebuild_weights`: the temporal weights
+    /// the frames were rebuilt from ([j][t], denoise::Report::rebuild_weights).
+    /// `shot` must outlive the filter. Throws std::invalid_argument
+    /// without points, frames, a spacing or (to filter) weights of the frames' length.
+    SurfaceFilter(const SurfaceSamples& samples, const SurfaceFilterOptions& options,
+                  const std::vector<std::vector<double>>& rebuild_weights, const SurfaceShot& shot);
+    ~SurfaceFilter();
+    SurfaceFilter(const SurfaceFilter&) = delete;
+    SurfaceFilter& operator=(const SurfaceFilter&) = delete;
+
+    const SurfaceFilterChoice& choice() const { return m_choice; }
+
+    /// Frame t of the samples' points filtered with the chosen width (0: as
+    /// rebuilt) into `values`, and sigma = sqrt(Σ_q H_pq² s_q² h_t + b_t²) into
+    /// `sigma`, both [point][channel]; `noisy`: the frame's input as
+    /// SurfaceShot::read_noisy gives it. May be called concurrently.
+    void frame(int t, const float* noisy, float* values, float* sigma) const;
+
+private:
+    struct State;
+    SurfaceFilterChoice m_choice;
+    std::unique_ptr<State> m_state;
+};
 
 } // namespace modestack::objectspace

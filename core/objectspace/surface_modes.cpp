@@ -9,10 +9,10 @@
 
 namespace modestack::objectspace {
 
-SurfaceModes project_on_weights(const std::vector<std::vector<double>>& weights,
-                                const std::vector<SurfaceFrame>& frames, std::int64_t points, int channels)
+SurfaceModes project_on_weights(const std::vector<std::vector<double>>& weights, const SurfaceShot& shot,
+                                std::int64_t points)
 {
-    const int frame_count = static_cast<int>(frames.size());
+    const int frame_count = shot.frames(), channels = shot.channels;
     Eigen::MatrixXd matrix(frame_count, static_cast<Eigen::Index>(weights.size()));
     for (std::size_t j = 0; j < weights.size(); ++j) {
         if (static_cast<int>(weights[j].size()) != frame_count)
@@ -41,7 +41,8 @@ SurfaceModes project_on_weights(const std::vector<std::vector<double>>& weights,
                 for (int t = 0; t < frame_count; ++t)
                     for (int j = 0; j < n; ++j)
                         for (std::size_t c = 0; c < ch; ++c)
-                            coefficient[j * ch + c] += modes.basis(t, j) * frames[t].values[p * ch + c];
+                            coefficient[j * ch + c] +=
+                                modes.basis(t, j) * shot.rebuilt[static_cast<std::size_t>(t)][p * ch + c];
             }
         });
     return modes;

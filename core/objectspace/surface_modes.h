@@ -31,11 +31,11 @@ struct SurfaceModes {
     }
 };
 
-/// Projects the rebuilt values of `frames` on an orthonormal basis of
+/// Projects the rebuilt values of `shot`'s first `points` points on an orthonormal basis of
 /// `weights` ([j][t], one entry per frame each; directions whose singular
 /// value is below 1e-9 of the largest are dropped). Throws
 /// std::invalid_argument for weights of another length than the frames.
-SurfaceModes project_on_weights(const std::vector<std::vector<double>>& weights,
-                                const std::vector<SurfaceFrame>& frames, std::int64_t points, int channels);
+SurfaceModes project_on_weights(const std::vector<std::vector<double>>& weights, const SurfaceShot& shot,
+                                std::int64_t points);
 
 } // namespace modestack::objectspace

@@ -10,34 +10,41 @@
 namespace modestack::objectspace {
 
 std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, double window,
-                                           const std::vector<SurfaceFrame>& frames, int channels,
-                                           int kept_modes)
+                                           const SurfaceShot& shot, int kept_modes)
 {
     const std::int64_t count = neighbours.count();
-    const int frame_count = static_cast<int>(frames.size());
-    const std::size_t ch = static_cast<std::size_t>(channels);
-    auto residual = [&](int t, std::int64_t q, std::size_t c) {
-        return static_cast<double>(frames[t].noisy[q * ch + c]) - frames[t].values[q * ch + c];
-    };
-    // Per point: Σ_t d², scaled to s² × frames by 1 / (1 + 1/k).
+    const int frame_count = shot.frames();
+    const std::size_t ch = static_cast<std::size_t>(shot.channels);
+    // Per point: Σ_t d², a frame at a time (each point's sum in frame order:
+    // the same bits for any thread count), scaled to s² × frames by 1 / (1 + 1/k).
     std::vector<double> energy(static_cast<std::size_t>(count) * ch, 0.0), noise(energy.size(), 0.0);
-    tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, count), [&](const tbb::blocked_range<std::int64_t>& range) {
-        for (std::int64_t p = range.begin(); p != range.end(); ++p) {
-            const std::int64_t* ids = neighbours.ids(p);
-            const int others = neighbours.count_within(p, window) - 1;
-            for (std::size_t c = 0; c < ch; ++c) {
-                double sum = 0;
-                for (int t = 0; t < frame_count; ++t) {
-                    double around = 0;
-                    for (std::int64_t n = 1; n <= others; ++n)
-                        around += residual(t, ids[n], c);
-                    double d = residual(t, p, c) - (others > 0 ? around / others : 0.0);
-                    sum += d * d;
-                }
-                energy[p * ch + c] = sum / (others > 0 ? 1.0 + 1.0 / others : 1.0);
-            }
-        }
-    });
+    std::vector<float> noisy(static_cast<std::size_t>(shot.frame_values));
+    for (int t = 0; t < frame_count; ++t) {
+        shot.read_noisy(t, noisy.data());
+        const float* rebuilt = shot.rebuilt[static_cast<std::size_t>(t)];
+        auto residual = [&](std::int64_t q, std::size_t c) {
+            return static_cast<double>(noisy[q * ch + c]) - rebuilt[q * ch + c];
+        };
+        tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, count),
+                          [&](const tbb::blocked_range<std::int64_t>& range) {
+                              for (std::int64_t p = range.begin(); p != range.end(); ++p) {
+                                  const std::int64_t* ids = neighbours.ids(p);
+                                  const int others = neighbours.count_within(p, window) - 1;
+                                  for (std::size_t c = 0; c < ch; ++c) {
+                                      double around = 0;
+                                      for (std::int64_t n = 1; n <= others; ++n)
+                                          around += residual(ids[n], c);
+                                      const double d = residual(p, c) - (others > 0 ? around / others : 0.0);
+                                      energy[p * ch + c] += d * d;
+                                  }
+                              }
+                          });
+    }
+    for (std::int64_t p = 0; p < count; ++p) {
+        const int others = neighbours.count_within(p, window) - 1;
+        for (std::size_t c = 0; c < ch; ++c)
+            energy[p * ch + c] /= others > 0 ? 1.0 + 1.0 / others : 1.0;
+    }
     // Pooled over the window, per degree of freedom.
     const double degrees = std::max(1, frame_count - kept_modes);
     tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, count), [&](const tbb::blocked_range<std::int64_t>& range) {

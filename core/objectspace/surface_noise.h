@@ -14,10 +14,10 @@
 namespace modestack::objectspace {
 
 /// s², the variance of one noisy value, per point and channel ([point][channel]),
-/// from the residuals of `frames` over the neighbours within `window` metres.
+/// from the residuals of `shot`'s frames over the neighbours within `window` metres.
 /// `rank`: N of the rebuild.
+/// The frames' inputs are read one at a time, in order.
 std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, double window,
-                                           const std::vector<SurfaceFrame>& frames, int channels,
-                                           int kept_modes);
+                                           const SurfaceShot& shot, int kept_modes);
 
 } // namespace modestack::objectspace

@@ -1,9 +1,10 @@
 // What the surface filter of object space works on: where the points sit on
 // their surfaces (the shot's rest pose, so neighbours on a surface stay
-// neighbours as it moves) and one frame of their values.
+// neighbours as it moves) and their frames.
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace modestack::objectspace {
@@ -16,13 +17,18 @@ struct SurfaceSamples {
     std::int64_t count() const { return static_cast<std::int64_t>(positions.size() / 3); }
 };
 
-/// One frame of the points, [point][channel]: the engine's input and rebuild
-/// (replaced by the filtered values), and where sigma goes.
-struct SurfaceFrame {
-    const float* noisy;
-    float* values;
-    float* sigma;
-    double leverage = 0; ///< h_t = Σ_{j≤N} V_tj²: the share of a frame's noise the rebuild keeps (leverage.h)
+/// The points' frames as the engine left them: its rebuild, kept, and its input,
+/// read one frame at a time (from memory or from the files again), with each
+/// frame's leverage. A frame is [point][channel] over the whole point image
+/// (`frame_values` floats: the samples' points first, then any padding).
+struct SurfaceShot {
+    std::function<void(int frame, float* destination)> read_noisy;
+    std::vector<const float*> rebuilt; ///< per frame
+    std::vector<double>
+        leverages; ///< h_t = Σ_{j≤N} V_tj²: the share of a frame's noise the rebuild keeps (leverage.h)
+    int channels = 1;
+    std::int64_t frame_values = 0;
+    int frames() const { return static_cast<int>(rebuilt.size()); }
 };
 
 } // namespace modestack::objectspace

@@ -4,7 +4,9 @@
 // the points back, the surface filter leaves them alone and the leverages sum to
 // N; with noise the surface filter lowers the error further than the temporal
 // rebuild alone; without positions and normals it is the engine on the point
-// image with everything spatial off, bit for bit.
+// image with everything spatial off, bit for bit; an input too large for the
+// memory budget is read again per frame with the same bits.
+#include "core/common/error.h"
 #include "core/denoise/engine.h"
 #include "core/objectspace/leverage.h"
 #include "core/objectspace/point_denoise.h"
@@ -13,7 +15,9 @@
 #include <doctest/doctest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <random>
+#include <string>
 #include <vector>
 
 using namespace modestack;
@@ -78,14 +82,30 @@ objectspace::SurfaceFilterOptions filter_options()
     return options;
 }
 
+// Every frame's point values and sigma as the result makes them.
+struct PointFrames {
+    std::vector<std::vector<float>> values, sigma;
+};
+
+PointFrames frames_of(const objectspace::PointDenoise& result)
+{
+    PointFrames frames;
+    for (int t = 0; t < kFrames; ++t) {
+        frames.values.emplace_back(static_cast<std::size_t>(result.frame_values()));
+        frames.sigma.emplace_back(frames.values.back().size());
+        result.frame(t, frames.values.back().data(), frames.sigma.back().data());
+    }
+    return frames;
+}
+
 // RMS over the real points (not the padding) of every frame.
-double rms_error(const PointShot& shot, objectspace::PointStore& store)
+double rms_error(const PointShot& shot, const PointFrames& frames)
 {
     const std::size_t values = static_cast<std::size_t>(shot.samples.count()) * 3;
     double sum = 0;
     for (int t = 0; t < kFrames; ++t)
         for (std::size_t v = 0; v < values; ++v) {
-            const double error = store.values(t)[v] - shot.truth.frames[t][v];
+            const double error = frames.values[t][v] - shot.truth.frames[t][v];
             sum += error * error;
         }
     return std::sqrt(sum / static_cast<double>(values * kFrames));
@@ -104,11 +124,12 @@ TEST_CASE("point denoise: rank-2 points are recovered, left unfiltered, and thei
     CHECK(result.over_surfaces);
     CHECK(result.report.rank_decision.kept_modes == 2);
     CHECK(result.filter.width == 0);
-    CHECK(rms_error(shot, result.points) < 1e-5);
+    const PointFrames frames = frames_of(result);
+    CHECK(rms_error(shot, frames) < 1e-5);
     double largest_sigma = 0;
     for (int t = 0; t < kFrames; ++t)
         for (std::size_t v = 0; v < static_cast<std::size_t>(shot.samples.count()) * 3; ++v)
-            largest_sigma = std::max(largest_sigma, static_cast<double>(result.points.sigma(t)[v]));
+            largest_sigma = std::max(largest_sigma, static_cast<double>(frames.sigma[t][v]));
     CHECK(largest_sigma < 1e-4);
     double leverage_sum = 0;
     for (double leverage : objectspace::frame_leverages(result.report.temporal_modes, kFrames))
@@ -125,7 +146,8 @@ TEST_CASE("point denoise: with noise the surface filter lowers the temporal rebu
     off.filter = false;
     objectspace::PointDenoise temporal =
         objectspace::denoise_points(shot.shot, denoise::Settings{}, shot.samples, off, Progress::silent());
-    const double error = rms_error(shot, filtered.points), temporal_error = rms_error(shot, temporal.points);
+    const double error = rms_error(shot, frames_of(filtered)),
+                 temporal_error = rms_error(shot, frames_of(temporal));
     MESSAGE("N = " << filtered.report.rank_decision.kept_modes << ", RMS error: noise 0.1, temporal "
                    << temporal_error << ", filtered " << error << " (" << filtered.filter.reasoning << ")");
     CHECK(filtered.report.rank_decision.kept_modes == 2);
@@ -150,8 +172,54 @@ TEST_CASE("point denoise: without positions and normals, the engine on the point
     plain.sigma_radius = 0;
     MemorySink sink(shot.shot.size);
     denoise::run_denoise(shot.shot, sink, plain, Progress::silent());
+    const PointFrames frames = frames_of(result);
     for (int t = 0; t < kFrames; ++t) {
-        CHECK(std::equal(sink.rebuilt[t].begin(), sink.rebuilt[t].end(), result.points.values(t)));
-        CHECK(std::equal(sink.sigma[t].begin(), sink.sigma[t].end(), result.points.sigma(t)));
+        CHECK(sink.rebuilt[t] == frames.values[t]);
+        CHECK(sink.sigma[t] == frames.sigma[t]);
+    }
+}
+
+TEST_CASE("point denoise: an input too large to keep is read again, with the same bits, and a budget too "
+          "small is refused")
+{
+    PointShot shot = make_point_shot(0.1);
+    const std::int64_t matrix = static_cast<std::int64_t>(shot.shot.size.width) * shot.shot.size.height * 3 *
+                                kFrames * static_cast<std::int64_t>(sizeof(float));
+    struct CountingSource : denoise::ForwardingSource {
+        using ForwardingSource::ForwardingSource;
+        void read_rows(int frame, int begin, int end, float* destination,
+                       denoise::PassThroughRows* rows) override
+        {
+            rows_read += end - begin;
+            ForwardingSource::read_rows(frame, begin, end, destination, rows);
+        }
+        std::int64_t rows_read = 0;
+    };
+    CountingSource roomy(shot.shot), tight(shot.shot);
+    denoise::Settings settings;
+    const objectspace::PointDenoise kept =
+        objectspace::denoise_points(roomy, settings, shot.samples, filter_options(), Progress::silent());
+    settings.max_memory_bytes =
+        matrix * 29 / 10; // the rebuild and the input do not fit with the engine's third
+    const objectspace::PointDenoise streamed =
+        objectspace::denoise_points(tight, settings, shot.samples, filter_options(), Progress::silent());
+    CHECK(kept.input_kept);
+    CHECK_FALSE(streamed.input_kept);
+    const std::int64_t engine_rows = roomy.rows_read;
+    const PointFrames kept_frames = frames_of(kept), streamed_frames = frames_of(streamed);
+    CHECK(kept_frames.values == streamed_frames.values);
+    CHECK(kept_frames.sigma == streamed_frames.sigma);
+    CHECK(roomy.rows_read == engine_rows); // kept: never read again
+    // Read again: once for the noise level and once per frame made.
+    MESSAGE("rows read: kept " << roomy.rows_read << ", read again " << tight.rows_read);
+    CHECK(tight.rows_read >= engine_rows + 2 * kFrames * shot.shot.size.height);
+
+    settings.max_memory_bytes = matrix * 3 / 2;
+    try {
+        objectspace::denoise_points(tight, settings, shot.samples, filter_options(), Progress::silent());
+        FAIL("a budget under twice the rebuild was taken");
+    } catch (const Error& error) {
+        CHECK(error.kind() == ErrorKind::Usage);
+        MESSAGE(std::string(error.what()));
     }
 }

@@ -1,6 +1,7 @@
 // The points kept in memory: KeepingSource hands on its inner source's rows
 // unchanged and, once every band was read (in any order, from any thread), holds
-// the whole shot; PointStore holds what a sink receives, band by band.
+// the whole shot; PointStore holds what a sink receives, band by band (sigma
+// only when asked).
 #include "core/objectspace/point_store.h"
 #include "tests/denoise/memory_shot.h"
 
@@ -49,17 +50,22 @@ TEST_CASE("point store: KeepingSource keeps every row it hands on")
         CHECK(std::equal(shot.frames[t].begin(), shot.frames[t].end(), keeping.frame(t)));
 }
 
-TEST_CASE("point store: PointStore holds the values and sigma written band by band")
+TEST_CASE("point store: PointStore holds the values, and sigma when asked, written band by band")
 {
     MemoryShot values = random_shot(2), sigma = random_shot(3);
-    objectspace::PointStore store(values.size);
-    const std::size_t row = std::size_t(values.size.width) * values.size.channels;
-    for (int t = 0; t < values.size.frames; ++t)
-        for (int begin = 0; begin < values.size.height; begin += 3)
-            store.write_rows(t, begin, begin + 3, values.frames[t].data() + begin * row,
-                             sigma.frames[t].data() + begin * row, nullptr);
-    for (int t = 0; t < values.size.frames; ++t) {
-        CHECK(std::equal(values.frames[t].begin(), values.frames[t].end(), store.values(t)));
-        CHECK(std::equal(sigma.frames[t].begin(), sigma.frames[t].end(), store.sigma(t)));
+    for (bool keep_sigma : {true, false}) {
+        objectspace::PointStore store(values.size, keep_sigma);
+        const std::size_t row = std::size_t(values.size.width) * values.size.channels;
+        for (int t = 0; t < values.size.frames; ++t)
+            for (int begin = 0; begin < values.size.height; begin += 3)
+                store.write_rows(t, begin, begin + 3, values.frames[t].data() + begin * row,
+                                 sigma.frames[t].data() + begin * row, nullptr);
+        for (int t = 0; t < values.size.frames; ++t) {
+            CHECK(std::equal(values.frames[t].begin(), values.frames[t].end(), store.values(t)));
+            if (keep_sigma)
+                CHECK(std::equal(sigma.frames[t].begin(), sigma.frames[t].end(), store.sigma(t)));
+            else
+                CHECK(store.sigma(t) == nullptr);
+        }
     }
 }

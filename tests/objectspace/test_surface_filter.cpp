@@ -14,12 +14,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <utility>
 #include <vector>
 
 using namespace modestack;
-using objectspace::SurfaceFrame;
 
 namespace {
 
@@ -86,17 +86,29 @@ Corner make_corner(double noise, bool blob = false)
     return corner;
 }
 
+// Filters every frame of `corner` in place (values and sigma).
 objectspace::SurfaceFilterChoice filter(Corner& corner, bool filter_on = true)
 {
-    std::vector<SurfaceFrame> frames;
-    for (int t = 0; t < kFrames; ++t)
-        frames.push_back({corner.noisy[t].data(), corner.rebuilt[t].data(), corner.sigma[t].data(),
-                          corner.profile[t] * corner.profile[t]});
+    objectspace::SurfaceShot shot;
+    shot.read_noisy = [&](int t, float* destination) {
+        std::copy(corner.noisy[t].begin(), corner.noisy[t].end(), destination);
+    };
+    for (int t = 0; t < kFrames; ++t) {
+        shot.rebuilt.push_back(corner.rebuilt[t].data());
+        shot.leverages.push_back(corner.profile[t] * corner.profile[t]);
+    }
+    shot.channels = 1;
+    shot.frame_values = static_cast<std::int64_t>(corner.truth.size());
     objectspace::SurfaceFilterOptions options;
     options.widths = {0.75, 1.0, 1.5, 2.0, 3.0};
     options.filter = filter_on;
     options.kept_modes = 1;
-    return objectspace::filter_surfaces(corner.samples, options, 1, {corner.profile}, frames);
+    const objectspace::SurfaceFilter surface_filter(corner.samples, options, {corner.profile}, shot);
+    std::vector<std::vector<float>> values = corner.rebuilt;
+    for (int t = 0; t < kFrames; ++t)
+        surface_filter.frame(t, corner.noisy[t].data(), values[t].data(), corner.sigma[t].data());
+    corner.rebuilt = values;
+    return surface_filter.choice();
 }
 
 double rms_error(const Corner& corner, const std::vector<std::vector<float>>& values)

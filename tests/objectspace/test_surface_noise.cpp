@@ -7,7 +7,9 @@
 
 #include <doctest/doctest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <random>
 #include <vector>
 
@@ -64,11 +66,18 @@ Field make_field(const double sigma[2])
 
 std::vector<double> noise_of(Field& field, double window)
 {
-    std::vector<objectspace::SurfaceFrame> frames;
-    for (int t = 0; t < kFrames; ++t)
-        frames.push_back({field.noisy[t].data(), field.rebuilt[t].data(), nullptr, 0.0});
+    objectspace::SurfaceShot shot;
+    shot.read_noisy = [&](int t, float* destination) {
+        std::copy(field.noisy[t].begin(), field.noisy[t].end(), destination);
+    };
+    for (int t = 0; t < kFrames; ++t) {
+        shot.rebuilt.push_back(field.rebuilt[t].data());
+        shot.leverages.push_back(0.0);
+    }
+    shot.channels = 2;
+    shot.frame_values = static_cast<std::int64_t>(field.noisy[0].size());
     const objectspace::SurfaceNeighbours neighbours(field.samples, window, 0.9);
-    return objectspace::surface_noise_variance(neighbours, window, frames, 2, 1);
+    return objectspace::surface_noise_variance(neighbours, window, shot, 1);
 }
 
 } // namespace
