@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cstddef>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace modestack::objectspace {
@@ -90,14 +91,27 @@ PointDenoise denoise_points(denoise::FrameSource& points, denoise::Settings sett
     const bool over_surfaces = samples.count() > 0 && samples.spacing > 0;
     const std::int64_t matrix_bytes = static_cast<std::int64_t>(shape.width) * shape.height * shape.channels *
                                       shape.frames * static_cast<std::int64_t>(sizeof(float));
-    const std::int64_t kept_bytes =
-        matrix_bytes * (over_surfaces ? 1 : 2); // the rebuild (and the engine's sigma)
-    if (2 * kept_bytes > settings.max_memory_bytes)
+    // Held after the engine: the rebuild (and the engine's sigma), and the
+    // surface filter: its window's lists, made now to be counted, and its
+    // arrays for N up to kReservedModes (N is known only after the engine;
+    // beyond it, the input's copy is given up first).
+    constexpr int kReservedModes = 2;
+    std::optional<SurfaceNeighbours> window;
+    std::int64_t kept_bytes = matrix_bytes * (over_surfaces ? 1 : 2);
+    if (over_surfaces) {
+        window.emplace(SurfaceFilter::window_neighbours(samples, filter));
+        kept_bytes +=
+            window->bytes() + SurfaceFilter::state_bytes(samples.count(), shape.channels, kReservedModes);
+    }
+    if (kept_bytes >= settings.max_memory_bytes)
         throw usage_error(
             fmt::format("--max-memory leaves {} MiB for the points, too little for object space: the "
-                        "rebuilt points alone hold {} MiB, and the engine needs as much again",
+                        "rebuilt points and their surface filter alone hold {} MiB",
                         settings.max_memory_bytes >> 20, (kept_bytes >> 20) + 1));
-    const bool keep_input = over_surfaces && 3 * matrix_bytes <= settings.max_memory_bytes;
+    // The input too when the engine is still left as much as one matrix: its
+    // bands are then not much narrower than without the copy.
+    const bool keep_input = over_surfaces && kept_bytes + 2 * matrix_bytes <= settings.max_memory_bytes;
+    const std::int64_t budget = settings.max_memory_bytes;
     settings.max_memory_bytes -= kept_bytes + (keep_input ? matrix_bytes : 0);
 
     PointDenoise result;
@@ -118,9 +132,17 @@ PointDenoise denoise_points(denoise::FrameSource& points, denoise::Settings sett
     held.shot.channels = shape.channels;
     held.shot.frame_values = held.frame_values();
     filter.kept_modes = result.report.rank_decision.kept_modes;
+    // More modes than reserved for: give the input copy's memory to the filter.
+    const std::int64_t filter_bytes =
+        window->bytes() + SurfaceFilter::state_bytes(samples.count(), shape.channels,
+                                                     static_cast<int>(result.report.rebuild_weights.size()));
+    if (held.kept && matrix_bytes * 2 + filter_bytes > budget) {
+        held.kept.reset();
+        result.input_kept = false;
+    }
     progress.begin("surface filter and sigma", 1);
     const auto start = std::chrono::steady_clock::now();
-    held.filter.emplace(samples, filter, result.report.rebuild_weights, held.shot);
+    held.filter.emplace(samples, filter, result.report.rebuild_weights, held.shot, std::move(*window));
     result.filter = held.filter->choice();
     result.filter.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     progress.end();

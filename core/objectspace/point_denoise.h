@@ -45,11 +45,13 @@ public:
 /// spatial parts. When `samples` has positions, normals and a spacing, sigma is
 /// then pooled over the surfaces and the points are filtered as `filter` says
 /// (its rank is set here to the engine's N); otherwise the engine's sigma over
-/// the point image stays and nothing is filtered. The rebuild is kept in
-/// memory, and the input too when three times the rebuild fits
-/// settings.max_memory_bytes; the engine gets the rest of the budget. `points`
-/// must outlive the result (frame() reads it again). Throws a usage error when
-/// the budget cannot hold the rebuild and as much again for the engine.
+/// the point image stays and nothing is filtered. The rebuild and the surface
+/// filter's state are kept in memory, and the input too when the engine is
+/// then still left one matrix's worth of settings.max_memory_bytes; the engine
+/// gets the rest of the budget. `points` must outlive the result (frame() reads
+/// it again). Throws a usage error when the budget cannot hold the rebuild and
+/// the filter; the engine's band plan refuses a rest too small for one band in
+/// its own words.
 PointDenoise denoise_points(denoise::FrameSource& points, denoise::Settings settings, const SurfaceSamples& samples,
                             SurfaceFilterOptions filter, Progress& progress);
 

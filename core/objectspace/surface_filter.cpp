@@ -17,6 +17,7 @@
 #include <cstdint>
 #include <optional>
 #include <stdexcept>
+#include <utility>
 
 namespace modestack::objectspace {
 namespace {
@@ -71,8 +72,8 @@ FilteredModes filter_modes(const SurfaceCells& cells, const SurfaceModes& modes,
 } // namespace
 
 struct SurfaceFilter::State {
-    State(const SurfaceSamples& samples, double window_radius, const SurfaceShot& shot)
-        : window(window_radius), window_neighbours(samples, window_radius, kMinNormalCosine), shot(shot)
+    State(double window_radius, SurfaceNeighbours neighbours, const SurfaceShot& shot)
+        : window(window_radius), window_neighbours(std::move(neighbours)), shot(shot)
     {
     }
     double window;
@@ -83,8 +84,20 @@ struct SurfaceFilter::State {
     std::optional<FilteredModes> filtered; // none: width 0
 };
 
+SurfaceNeighbours SurfaceFilter::window_neighbours(const SurfaceSamples& samples,
+                                                   const SurfaceFilterOptions& options)
+{
+    return SurfaceNeighbours(samples, options.window_spacings * samples.spacing, kMinNormalCosine);
+}
+
+std::int64_t SurfaceFilter::state_bytes(std::int64_t points, int channels, int modes)
+{
+    return points * static_cast<std::int64_t>(sizeof(double)) * (2 * modes + 2) * channels;
+}
+
 SurfaceFilter::SurfaceFilter(const SurfaceSamples& samples, const SurfaceFilterOptions& options,
-                             const std::vector<std::vector<double>>& rebuild_weights, const SurfaceShot& shot)
+                             const std::vector<std::vector<double>>& rebuild_weights, const SurfaceShot& shot,
+                             SurfaceNeighbours window)
 {
     m_choice.widths.push_back(0);
     if (options.filter)
@@ -94,7 +107,7 @@ SurfaceFilter::SurfaceFilter(const SurfaceSamples& samples, const SurfaceFilterO
     if (samples.count() == 0 || shot.frames() == 0 || !(samples.spacing > 0))
         throw std::invalid_argument("SurfaceFilter: no points, frames or spacing");
     const double spacing = samples.spacing;
-    m_state = std::make_unique<State>(samples, options.window_spacings * spacing, shot);
+    m_state = std::make_unique<State>(options.window_spacings * spacing, std::move(window), shot);
     State& state = *m_state;
     state.noise = surface_noise_variance(state.window_neighbours, state.window, shot, options.kept_modes);
 

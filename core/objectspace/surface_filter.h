@@ -14,7 +14,10 @@
 // and N, not the frames, and its memory with the points only.
 #pragma once
 
+#include "core/objectspace/surface_neighbours.h"
 #include "core/objectspace/surface_samples.h"
+
+#include <cstdint>
 
 #include <memory>
 #include <string>
@@ -53,11 +56,23 @@ public:
     /// the frames were rebuilt from ([j][t], denoise::Report::rebuild_weights).
     /// `shot` must outlive the filter. Throws std::invalid_argument
     /// without points, frames, a spacing or (to filter) weights of the frames' length.
+    /// `window`: window_neighbours(samples, options), made beforehand so that
+    /// its memory is known before the engine runs.
     SurfaceFilter(const SurfaceSamples& samples, const SurfaceFilterOptions& options,
-                  const std::vector<std::vector<double>>& rebuild_weights, const SurfaceShot& shot);
+                  const std::vector<std::vector<double>>& rebuild_weights, const SurfaceShot& shot,
+                  SurfaceNeighbours window);
     ~SurfaceFilter();
     SurfaceFilter(const SurfaceFilter&) = delete;
     SurfaceFilter& operator=(const SurfaceFilter&) = delete;
+
+    /// The neighbours of sigma's window (options.window_spacings) the filter works with.
+    static SurfaceNeighbours window_neighbours(const SurfaceSamples& samples,
+                                               const SurfaceFilterOptions& options);
+    /// Bytes the filter keeps besides its window's lists, for `points` points of
+    /// `channels` channels rebuilt from `modes` modes: its coefficients, their
+    /// filtered copy, the noise levels. (Its survey's temporaries, about 100
+    /// bytes per point, are freed before any frame is made.)
+    static std::int64_t state_bytes(std::int64_t points, int channels, int modes);
 
     const SurfaceFilterChoice& choice() const { return m_choice; }
 

@@ -41,6 +41,13 @@ double SurfaceNeighbours::mean_size() const
     return points > 0 ? static_cast<double>(m_first.back()) / static_cast<double>(points) : 0.0;
 }
 
+std::int64_t SurfaceNeighbours::bytes() const
+{
+    return static_cast<std::int64_t>(m_first.size() * sizeof(std::int64_t) +
+                                     m_ids.size() * sizeof(std::int64_t) +
+                                     m_distances.size() * sizeof(float));
+}
+
 int SurfaceNeighbours::count_within(std::int64_t p, double radius) const
 {
     const float* d2 = distances_squared(p);

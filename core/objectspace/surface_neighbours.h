@@ -24,6 +24,8 @@ public:
     const float* distances_squared(std::int64_t p) const { return m_distances.data() + m_first[p]; }
     std::int64_t size(std::int64_t p) const { return m_first[p + 1] - m_first[p]; }
     double mean_size() const;
+    /// Bytes the lists hold.
+    std::int64_t bytes() const;
     /// How many of p's neighbours (itself first) lie within `radius` metres.
     int count_within(std::int64_t p, double radius) const;
 

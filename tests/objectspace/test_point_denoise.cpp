@@ -199,8 +199,13 @@ TEST_CASE("point denoise: an input too large to keep is read again, with the sam
     denoise::Settings settings;
     const objectspace::PointDenoise kept =
         objectspace::denoise_points(roomy, settings, shot.samples, filter_options(), Progress::silent());
-    settings.max_memory_bytes =
-        matrix * 29 / 10; // the rebuild and the input do not fit with the engine's third
+    // What the result holds besides the matrices: the surface filter's window
+    // lists and its arrays for up to 2 modes.
+    const std::int64_t filter =
+        objectspace::SurfaceFilter::window_neighbours(shot.samples, filter_options()).bytes() +
+        objectspace::SurfaceFilter::state_bytes(shot.samples.count(), 3, 2);
+    // The rebuild, the input and a matrix's worth for the engine do not fit.
+    settings.max_memory_bytes = filter + matrix * 29 / 10;
     const objectspace::PointDenoise streamed =
         objectspace::denoise_points(tight, settings, shot.samples, filter_options(), Progress::silent());
     CHECK(kept.input_kept);
@@ -214,10 +219,10 @@ TEST_CASE("point denoise: an input too large to keep is read again, with the sam
     MESSAGE("rows read: kept " << roomy.rows_read << ", read again " << tight.rows_read);
     CHECK(tight.rows_read >= engine_rows + 2 * kFrames * shot.shot.size.height);
 
-    settings.max_memory_bytes = matrix * 3 / 2;
+    settings.max_memory_bytes = filter + matrix;
     try {
         objectspace::denoise_points(tight, settings, shot.samples, filter_options(), Progress::silent());
-        FAIL("a budget under twice the rebuild was taken");
+        FAIL("a budget that cannot hold the rebuild was taken");
     } catch (const Error& error) {
         CHECK(error.kind() == ErrorKind::Usage);
         MESSAGE(std::string(error.what()));

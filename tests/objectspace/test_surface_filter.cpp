@@ -103,7 +103,9 @@ objectspace::SurfaceFilterChoice filter(Corner& corner, bool filter_on = true)
     options.widths = {0.75, 1.0, 1.5, 2.0, 3.0};
     options.filter = filter_on;
     options.kept_modes = 1;
-    const objectspace::SurfaceFilter surface_filter(corner.samples, options, {corner.profile}, shot);
+    const objectspace::SurfaceFilter surface_filter(
+        corner.samples, options, {corner.profile}, shot,
+        objectspace::SurfaceFilter::window_neighbours(corner.samples, options));
     std::vector<std::vector<float>> values = corner.rebuilt;
     for (int t = 0; t < kFrames; ++t)
         surface_filter.frame(t, corner.noisy[t].data(), values[t].data(), corner.sigma[t].data());
