@@ -98,7 +98,8 @@ nlohmann::ordered_json object_space_json(const DenoiseResult& result)
     json["object_space"] = {{"points_input", result.points_input},
                             {"points", points.points},
                             {"point_image_width", report.shape.width},
-                            {"point_image_height", report.shape.height}};
+                            {"point_image_height", report.shape.height},
+                            {"points_read_again", points.points_read_again}};
     json["surface_filter"] = {{"enabled", result.surface_filter},
                               {"width_spacings", points.filter.width},
                               {"widths", points.filter.widths},

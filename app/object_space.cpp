@@ -157,6 +157,7 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
         objectspace::denoise_points(point_source, settings, samples, filter, progress);
     result.report = std::move(denoised.report);
     result.filter = std::move(denoised.filter);
+    result.points_read_again = denoised.over_surfaces && !denoised.input_kept;
     if (!denoised.over_surfaces)
         progress.warn(fmt::format("{} has no Position and Normal layers or no modestack:point_spacing: sigma is "
                                   "the point image's and the points are not filtered over the surfaces",

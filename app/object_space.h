@@ -47,6 +47,8 @@ struct ObjectSpaceResult {
     denoise::Report report;     ///< the engine's, on the points
     objectspace::SurfaceFilterChoice filter;  ///< what the surface filter chose (width 0: none)
     std::int64_t points = 0;    ///< surface points (from the points files)
+    bool points_read_again =
+        false; ///< the points' input did not fit --max-memory beside the rebuild: read per frame
     int frame_width = 0, frame_height = 0;
 };
 

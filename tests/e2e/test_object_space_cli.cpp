@@ -69,6 +69,7 @@ TEST_CASE("render --points and denoise --object-space on a moving camera")
     std::string summary = testkit::read_text(dir.file("a.json"));
     CHECK(summary.find("\"object_space\"") != std::string::npos);
     CHECK(summary.find("\"points\"") != std::string::npos);
+    CHECK(summary.find("\"points_read_again\": false") != std::string::npos); // a small shot's input is kept
 }
 
 TEST_CASE("denoise --object-space: a static camera gives the image-space result within noise")
