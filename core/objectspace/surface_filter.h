@@ -18,7 +18,6 @@
 #include "core/objectspace/surface_samples.h"
 
 #include <cstdint>
-
 #include <memory>
 #include <string>
 #include <vector>

@@ -14,6 +14,7 @@
 
 #include <doctest/doctest.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -193,7 +194,7 @@ TEST_CASE("point denoise: an input too large to keep is read again, with the sam
             rows_read += end - begin;
             ForwardingSource::read_rows(frame, begin, end, destination, rows);
         }
-        std::int64_t rows_read = 0;
+        std::atomic<std::int64_t> rows_read{0}; // the engine reads frames from several threads
     };
     CountingSource roomy(shot.shot), tight(shot.shot);
     denoise::Settings settings;
@@ -210,13 +211,13 @@ TEST_CASE("point denoise: an input too large to keep is read again, with the sam
         objectspace::denoise_points(tight, settings, shot.samples, filter_options(), Progress::silent());
     CHECK(kept.input_kept);
     CHECK_FALSE(streamed.input_kept);
-    const std::int64_t engine_rows = roomy.rows_read;
+    const std::int64_t engine_rows = roomy.rows_read.load();
     const PointFrames kept_frames = frames_of(kept), streamed_frames = frames_of(streamed);
     CHECK(kept_frames.values == streamed_frames.values);
     CHECK(kept_frames.sigma == streamed_frames.sigma);
     CHECK(roomy.rows_read == engine_rows); // kept: never read again
     // Read again: once for the noise level and once per frame made.
-    MESSAGE("rows read: kept " << roomy.rows_read << ", read again " << tight.rows_read);
+    MESSAGE("rows read: kept " << roomy.rows_read.load() << ", read again " << tight.rows_read.load());
     CHECK(tight.rows_read >= engine_rows + 2 * kFrames * shot.shot.size.height);
 
     settings.max_memory_bytes = filter + matrix;
