@@ -145,14 +145,15 @@ ObjectSpaceResult run_object_space(const ObjectSpaceJob& job, denoise::Settings 
     // The budget is the whole process's, as for images: less what it holds
     // already, the points files' decoders, the outputs' buffers and what each
     // frame rebuilt at once holds after the engine (output_frame_bytes).
+    const int frames_at_once = tbb::this_task_arena::max_concurrency();
     settings.max_memory_bytes =
         engine_memory_budget(settings.max_memory_bytes, point_reader, sink.open_output_bytes()) -
-        tbb::this_task_arena::max_concurrency() * output_frame_bytes(frame_reader, point_reader);
+        frames_at_once * output_frame_bytes(frame_reader, point_reader);
     if (settings.max_memory_bytes <= 0)
         throw usage_error(
             fmt::format("--max-memory is too small for object space: rebuilding {} frames at once "
                         "alone takes more",
-                        tbb::this_task_arena::max_concurrency()));
+                        frames_at_once));
     objectspace::PointDenoise denoised =
         objectspace::denoise_points(point_source, settings, samples, filter, progress);
     result.report = std::move(denoised.report);

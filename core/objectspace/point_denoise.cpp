@@ -59,17 +59,16 @@ void PointDenoise::frame(int t, float* values, float* sigma) const
     const Held& points = *held;
     const std::size_t all = static_cast<std::size_t>(points.frame_values());
     const float* rebuilt = points.store.values(t);
+    std::copy(rebuilt, rebuilt + all, values);
     if (!points.filter) { // the engine's values and sigma over the point image
-        std::copy(rebuilt, rebuilt + all, values);
         std::copy(points.store.sigma(t), points.store.sigma(t) + all, sigma);
         return;
     }
     // Padding points past the samples' keep their rebuilt value and no sigma.
-    std::copy(rebuilt, rebuilt + all, values);
     std::fill(sigma, sigma + all, 0.0f);
     const float* noisy = nullptr;
     if (points.kept) {
-        noisy = points.kept->frame(t);
+        noisy = points.kept->frame(t); // no copy
     } else {
         std::vector<float>& buffer = points.noisy_of_worker.local();
         buffer.resize(all);

@@ -75,9 +75,12 @@ struct SurfaceFilter::State {
     State(double window_radius, SurfaceNeighbours neighbours, const SurfaceShot& shot)
         : window(window_radius), window_neighbours(std::move(neighbours)), shot(shot)
     {
+        for (std::int64_t p = 0; p < window_neighbours.count(); ++p)
+            window_members.push_back(window_neighbours.count_within(p, window));
     }
     double window;
     SurfaceNeighbours window_neighbours;
+    std::vector<int> window_members; // per point: its window's size, itself included
     const SurfaceShot& shot;
     std::vector<double> noise; // s² per point and channel
     SurfaceModes modes;
@@ -155,7 +158,7 @@ void SurfaceFilter::frame(int t, const float* noisy, float* values, float* sigma
         tbb::blocked_range<std::int64_t>(0, count), [&](const tbb::blocked_range<std::int64_t>& range) {
             for (std::int64_t p = range.begin(); p != range.end(); ++p) {
                 const std::int64_t* ids = window_neighbours.ids(p);
-                const int members = window_neighbours.count_within(p, state.window);
+                const int members = state.window_members[static_cast<std::size_t>(p)];
                 for (std::size_t c = 0; c < ch; ++c) {
                     double value = rebuilt[p * ch + c], kept_noise = state.noise[p * ch + c];
                     if (filtered) {

@@ -18,6 +18,9 @@ std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, 
     // Per point: Σ_t d², a frame at a time (each point's sum in frame order:
     // the same bits for any thread count), scaled to s² × frames by 1 / (1 + 1/k).
     std::vector<double> energy(static_cast<std::size_t>(count) * ch, 0.0), noise(energy.size(), 0.0);
+    std::vector<int> members(static_cast<std::size_t>(count)); // p's window, itself included: found once
+    for (std::int64_t p = 0; p < count; ++p)
+        members[p] = neighbours.count_within(p, window);
     std::vector<float> noisy(static_cast<std::size_t>(shot.frame_values));
     for (int t = 0; t < frame_count; ++t) {
         shot.read_noisy(t, noisy.data());
@@ -29,7 +32,7 @@ std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, 
                           [&](const tbb::blocked_range<std::int64_t>& range) {
                               for (std::int64_t p = range.begin(); p != range.end(); ++p) {
                                   const std::int64_t* ids = neighbours.ids(p);
-                                  const int others = neighbours.count_within(p, window) - 1;
+                                  const int others = members[p] - 1;
                                   for (std::size_t c = 0; c < ch; ++c) {
                                       double around = 0;
                                       for (std::int64_t n = 1; n <= others; ++n)
@@ -41,7 +44,7 @@ std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, 
                           });
     }
     for (std::int64_t p = 0; p < count; ++p) {
-        const int others = neighbours.count_within(p, window) - 1;
+        const int others = members[p] - 1;
         for (std::size_t c = 0; c < ch; ++c)
             energy[p * ch + c] /= others > 0 ? 1.0 + 1.0 / others : 1.0;
     }
@@ -50,12 +53,11 @@ std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, 
     tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, count), [&](const tbb::blocked_range<std::int64_t>& range) {
         for (std::int64_t p = range.begin(); p != range.end(); ++p) {
             const std::int64_t* ids = neighbours.ids(p);
-            const int members = neighbours.count_within(p, window);
             for (std::size_t c = 0; c < ch; ++c) {
                 double sum = 0;
-                for (int n = 0; n < members; ++n)
+                for (int n = 0; n < members[p]; ++n)
                     sum += energy[ids[n] * ch + c];
-                noise[p * ch + c] = sum / members / degrees;
+                noise[p * ch + c] = sum / members[p] / degrees;
             }
         }
     });
