@@ -17,7 +17,7 @@ static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "stage files hold littl
 
 // The first line of every stage file. Its number changes with the layout: 2 added
 // the input's roughness (statistics) and each frame's noise factor (solve).
-constexpr const char* kMagic = "modestack stage file 2";
+constexpr const char* kMagic = "modestack stage file 3"; // 3: survey rows count each mode's high-pass ratios
 constexpr const char* kMagicPrefix = "modestack stage file ";
 
 // Throws a one-line error unless `line` is this version's first line.

@@ -17,6 +17,47 @@
 namespace modestack::denoise {
 namespace {
 
+// The per-sample ratio q = HP(c_j)² / (1 + 1/n) / v_p of each mode, counted in
+// log-spaced bins (8 per octave over [2^-8, 2^8), one bin below and one above):
+// counts add exactly in any order, so the median is that of one run however the
+// rows were split.
+constexpr int kRatioBinsPerOctave = 8;
+constexpr int kRatioOctaves = 16;
+constexpr int kRatioBins = kRatioBinsPerOctave * kRatioOctaves + 2;
+
+int ratio_bin(double ratio)
+{
+    if (!(ratio >= std::ldexp(1.0, -kRatioOctaves / 2)))
+        return 0;
+    const int bin =
+        static_cast<int>(std::floor((std::log2(ratio) + kRatioOctaves / 2) * kRatioBinsPerOctave)) + 1;
+    return std::min(bin, kRatioBins - 1);
+}
+
+// The median of counted ratios, interpolated in log space within its bin (the
+// bins' edges for the bins below and above the range).
+double ratio_median(const double* counts)
+{
+    double total = 0;
+    for (int b = 0; b < kRatioBins; ++b)
+        total += counts[b];
+    if (total <= 0)
+        return 0;
+    double below = 0;
+    for (int b = 0; b < kRatioBins; ++b) {
+        if (below + counts[b] >= 0.5 * total) {
+            const double edge =
+                b == 0 ? 0.0 : static_cast<double>(b - 1) / kRatioBinsPerOctave - kRatioOctaves / 2;
+            if (b == 0 || b == kRatioBins - 1)
+                return std::exp2(edge);
+            const double inside = counts[b] > 0 ? (0.5 * total - below) / counts[b] : 0.0;
+            return std::exp2(edge + inside / kRatioBinsPerOctave);
+        }
+        below += counts[b];
+    }
+    return 0;
+}
+
 using lowrank::BandView;
 using lowrank::ImageBandShape;
 using lowrank::MutableBandView;
@@ -207,13 +248,16 @@ void SureSurvey::add_band(const BandView& coefficients, const std::vector<float>
     tbb::parallel_for(valid_y0, valid_y1, [&](int y) {
         const int image_y = band_y0 + y;
         std::vector<double>& sums = m_rows[static_cast<std::size_t>(image_y)];
-        sums.assign(static_cast<std::size_t>(m_modes) * candidates * 2 + 2 * m_modes + 1, 0.0);
-        if (image_y % m_stride != 0)
+        if (image_y % m_stride != 0) { // a row off the survey's grid adds nothing: held empty
+            sums.clear();
             return;
+        }
+        sums.assign(row_sum_length(), 0.0);
         double* fit_trace = sums.data();
         double* energy = fit_trace + static_cast<std::size_t>(m_modes) * candidates * 2;
         double& noise = energy[m_modes];
         double* high_pass_energy = energy + m_modes + 1;
+        double* ratio_counts = high_pass_energy + m_modes; // [mode][bin]
         WeightWindow window(guide, widest);
         std::vector<float> applied(static_cast<std::size_t>(per_pixel));
         for (int x = 0; x < shape.width; x += m_stride) {
@@ -240,6 +284,9 @@ void SureSurvey::add_band(const BandView& coefficients, const std::vector<float>
                     // White noise of variance v gives HP² of mean v·(1 + 1/count).
                     const double high_pass = image[pixel + c] - neighbours / count;
                     high_pass_energy[j] += high_pass * high_pass / (1.0 + 1.0 / count);
+                    if (variance > 0)
+                        ratio_counts[j * kRatioBins +
+                                     ratio_bin(high_pass * high_pass / (1.0 + 1.0 / count) / variance)] += 1;
                 }
             }
             for (int k = 1; k < candidates; ++k) {
@@ -264,7 +311,8 @@ void SureSurvey::add_band(const BandView& coefficients, const std::vector<float>
 
 std::size_t SureSurvey::row_sum_length() const
 {
-    return static_cast<std::size_t>(m_modes) * m_candidates.size() * 2 + 2 * m_modes + 1;
+    return static_cast<std::size_t>(m_modes) * m_candidates.size() * 2 + 2 * m_modes + 1 +
+           static_cast<std::size_t>(m_modes) * kRatioBins;
 }
 
 std::vector<std::vector<double>> SureSurvey::row_sums(int row_begin, int row_end) const
@@ -288,13 +336,22 @@ void SureSurvey::restore_row_sums(int row_begin, std::vector<std::vector<double>
 ModeFilterPlan SureSurvey::finish(int fixed_modes, double noise_scale_cap) const
 {
     const int candidates = static_cast<int>(m_candidates.size());
-    std::vector<double> totals(static_cast<std::size_t>(m_modes) * candidates * 2 + 2 * m_modes + 1, 0.0);
+    std::vector<double> totals(row_sum_length(), 0.0);
     for (const std::vector<double>& row : m_rows)  // image-row order: the same for any banding
         for (std::size_t i = 0; i < row.size(); ++i)
             totals[i] += row[i];
     const double* energy = totals.data() + static_cast<std::size_t>(m_modes) * candidates * 2;
     const double noise = energy[m_modes];
     const double* high_pass_energy = energy + m_modes + 1;
+    const double* ratio_counts = high_pass_energy + m_modes;
+    // The later half of the surveyed modes are the most nearly pure noise: their
+    // mean ratio over their median is what the noise's spread of ratios gives
+    // (more than a Gaussian's 2.2 on rendered noise, heterogeneous from pixel to
+    // pixel, and more in the modes that gather its noisiest pixels): the largest.
+    double noise_mean_per_median = 0;
+    for (int j = m_modes / 2; j < m_modes && noise > 0; ++j)
+        if (const double median = ratio_median(ratio_counts + j * kRatioBins); median > 0)
+            noise_mean_per_median = std::max(noise_mean_per_median, high_pass_energy[j] / noise / median);
 
     ModeFilterPlan plan;
     plan.candidates = m_candidates;
@@ -308,6 +365,16 @@ ModeFilterPlan SureSurvey::finish(int fixed_modes, double noise_scale_cap) const
         // The mode's own noise energy over Σ v_p (1 when nothing is measured),
         // capped at noise_scale_cap (kMaximumNoiseScale unless noise repeats).
         choice.noise_scale = noise > 0 ? std::min(noise_scale_cap, high_pass_energy[j] / noise) : 1.0;
+        // A mean at the cap measured edges (see the file comment); edges raise
+        // the mean of a lit mode's ratios, not their median, so the scale is then
+        // what its median implies by the noise's own spread (at most the cap, at
+        // least v_p). Not where noise that repeats is counted (a raised cap):
+        // that noise gathers in the first modes with a spread of its own.
+        if (noise_mean_per_median > 0 && noise_scale_cap <= kMaximumNoiseScale &&
+            choice.noise_scale >= noise_scale_cap)
+            choice.noise_scale =
+                std::min(choice.noise_scale,
+                         std::max(1.0, ratio_median(ratio_counts + j * kRatioBins) * noise_mean_per_median));
         const double mode_noise = noise * choice.noise_scale;
         choice.unfiltered_sure = mode_noise;  // identity: ‖c − c‖² + 2 Σ v − Σ v
         choice.sure = mode_noise;

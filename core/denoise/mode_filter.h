@@ -29,9 +29,18 @@
 // high-pass energy: scale_j = Σ_p HP(c_j)_p² / (1 + 1/n) / Σ_p v_p, HP the
 // difference to the mean of the n = 4 neighbours. Smooth signal barely passes the
 // high-pass; edges and texture do, which errs on the safe side (less filtering,
-// fewer modes). A median of the ratio was tried first: it follows the quiet bulk of
-// the pixels, under-estimated the noise modes by a third and kept 16 modes where 3
-// were best (orbit scene, 48 frames).
+// fewer modes) up to the cap below: a mean that reaches it measured edges, not
+// noise. On a lit mode of direct light that is the rule (the first mode sat at the
+// cap on most DiffDir shots measured), and the cap itself still blurred the mode
+// across its shadows' edges. Edges are a minority of the pixels, so they raise the
+// mean of the per-sample ratio q = HP² / (1 + 1/n) / v_p but barely its median; a
+// median alone, though, follows the quiet bulk of heterogeneous render noise (it
+// read the noise modes a third low and kept 16 modes where 3 were best). So a
+// mode at the cap gets median_j(q) times the mean-over-median that noise itself
+// shows, the largest of the later half of the surveyed modes (the most nearly pure
+// noise), between 1 and the cap (bench/results/estimators.md, section 13). Below
+// the cap the mean stands: on indirect light a first mode at 2.3 whose median said
+// 1.6 measured best at the mean's blur, 3.3× better than at the median's.
 // Noise that repeats from frame to frame (a fixed seed) lies in the modes, not in
 // the residual v_p is taken from, so a mode can hold many times v_p of noise: then
 // the cap below is raised by what the measured repeating noise can put in one
@@ -145,8 +154,9 @@ public:
     ModeFilterPlan finish(int fixed_modes, double noise_scale_cap = kMaximumNoiseScale) const;
 
     /// The sums of image rows [row_begin, row_end) as add_band left them (empty for
-    /// rows not added), and their restoration, for a survey split over farm tasks
-    /// (io/stage_files.h): finish() then gives the same plan as one survey.
+    /// rows not added and rows off the survey's grid), and their restoration, for a
+    /// survey split over farm tasks (io/stage_files.h): finish() then gives the same
+    /// plan as one survey.
     std::vector<std::vector<double>> row_sums(int row_begin, int row_end) const;
     /// Throws modestack::Error (internal) when a row's length does not match this survey.
     void restore_row_sums(int row_begin, std::vector<std::vector<double>> sums);

@@ -1,6 +1,7 @@
 // The mode filter (core/denoise/mode_filter.h): SURE picks no filter on noise-free
 // data and a real width on noisy smooth data, and its estimate matches the true
-// error; the guided filter keeps a step edge sharper than a plain Gaussian; with
+// error; a lit mode's hard edges do not pass for noise in its noise scale; the
+// guided filter keeps a step edge sharper than a plain Gaussian; with
 // filtering the engine keeps a weak but real mode that press drops, and lowers the
 // error; sigma stays calibrated; streamed, kept, 1- and 2-thread runs give the same bits.
 #include "core/denoise/engine.h"
@@ -131,6 +132,42 @@ TEST_CASE("mode filter: on noisy smooth modes SURE picks a width and estimates t
         CHECK(std::abs(choice.sure - error) < 3 * std::sqrt(2 * pixels) * noise * noise);
         CHECK(choice.kept);
     }
+}
+
+TEST_CASE("mode filter: a lit mode's hard edges do not pass for noise, noise modes keep their scale")
+{
+    // Mode 0: blocks of 32 pixels whose levels jump by 40 noise deviations
+    // (about one pixel in nine touches an edge); modes 1 to 7: noise alone.
+    const double noise = 0.5;
+    Images images = make_images(128, 96, 8, noise, [](int j, int x, int y) {
+        return j == 0 ? 20.0 * (((x / 32) + (y / 32)) % 2) : 0.0;
+    });
+    // The plain ratio of high-pass energy to Σ v that the mean alone would give.
+    double high_pass = 0;
+    int samples = 0;
+    for (int y = 1; y + 1 < images.height; ++y)
+        for (int x = 1; x + 1 < images.width; ++x) {
+            auto at = [&](int u, int v) { return double(images.noisy[std::size_t(v) * images.width + u]); };
+            const double d = at(x, y) - (at(x - 1, y) + at(x + 1, y) + at(x, y - 1) + at(x, y + 1)) / 4;
+            high_pass += d * d / 1.25, ++samples;
+        }
+    CHECK(high_pass / (samples * noise * noise) > 2 * kMaximumNoiseScale);
+
+    SureSurvey sums(ModeFilterOptions{}, images.width, images.height, 1, images.modes);
+    sums.add_band(images.view(), images.variance, images.shape(), 0, 0, images.height);
+    const ModeFilterPlan plan = sums.finish(0);
+    // Its median says how much noise it holds: about v (the median of a ninth
+    // of edge pixels and the rest noise lies a little above the noise's own).
+    CHECK(plan.modes[0].noise_scale >= 1.0);
+    CHECK(plan.modes[0].noise_scale < 1.6);
+    for (int j = 1; j < images.modes; ++j) {
+        CAPTURE(j);
+        CHECK(plan.modes[j].noise_scale == doctest::Approx(1.0).epsilon(0.06));
+    }
+    // Where noise that repeats is counted (a raised cap) the mean stands: that
+    // noise gathers in the first modes with a spread of its own.
+    const ModeFilterPlan repeating = sums.finish(0, 100.0);
+    CHECK(repeating.modes[0].noise_scale > 2 * kMaximumNoiseScale);
 }
 
 TEST_CASE("mode filter: the guided filter keeps a step edge of the guide sharper than a plain Gaussian")
