@@ -35,7 +35,7 @@ int ratio_bin(double ratio)
 }
 
 // The median of counted ratios, interpolated in log space within its bin (the
-// bins' edges for the bins below and above the range).
+// range's edges for the bins below and above it; 0 without counts).
 double ratio_median(const double* counts)
 {
     double total = 0;
@@ -46,9 +46,10 @@ double ratio_median(const double* counts)
     double below = 0;
     for (int b = 0; b < kRatioBins; ++b) {
         if (below + counts[b] >= 0.5 * total) {
-            const double edge =
-                b == 0 ? 0.0 : static_cast<double>(b - 1) / kRatioBinsPerOctave - kRatioOctaves / 2;
-            if (b == 0 || b == kRatioBins - 1)
+            if (b == 0)
+                return std::ldexp(1.0, -kRatioOctaves / 2);
+            const double edge = static_cast<double>(b - 1) / kRatioBinsPerOctave - kRatioOctaves / 2;
+            if (b == kRatioBins - 1)
                 return std::exp2(edge);
             const double inside = counts[b] > 0 ? (0.5 * total - below) / counts[b] : 0.0;
             return std::exp2(edge + inside / kRatioBinsPerOctave);

@@ -168,6 +168,15 @@ TEST_CASE("mode filter: a lit mode's hard edges do not pass for noise, noise mod
     // noise gathers in the first modes with a spread of its own.
     const ModeFilterPlan repeating = sums.finish(0, 100.0);
     CHECK(repeating.modes[0].noise_scale > 2 * kMaximumNoiseScale);
+
+    // The same edges with no noise at all in that mode: most of its ratios are
+    // 0, and it gets v_p itself, the least a mode holds.
+    Images clean_edges = images;
+    std::copy_n(clean_edges.clean.begin(), std::size_t(clean_edges.width) * clean_edges.height,
+                clean_edges.noisy.begin());
+    SureSurvey clean_sums(ModeFilterOptions{}, images.width, images.height, 1, images.modes);
+    clean_sums.add_band(clean_edges.view(), clean_edges.variance, clean_edges.shape(), 0, 0, images.height);
+    CHECK(clean_sums.finish(0).modes[0].noise_scale == 1.0);
 }
 
 TEST_CASE("mode filter: the guided filter keeps a step edge of the guide sharper than a plain Gaussian")
