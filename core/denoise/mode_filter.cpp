@@ -24,10 +24,11 @@ namespace {
 constexpr int kRatioBinsPerOctave = 8;
 constexpr int kRatioOctaves = 16;
 constexpr int kRatioBins = kRatioBinsPerOctave * kRatioOctaves + 2;
+const double kLowestRatio = std::ldexp(1.0, -kRatioOctaves / 2); // the first counted bin's lower edge
 
 int ratio_bin(double ratio)
 {
-    if (!(ratio >= std::ldexp(1.0, -kRatioOctaves / 2)))
+    if (!(ratio >= kLowestRatio))
         return 0;
     const int bin =
         static_cast<int>(std::floor((std::log2(ratio) + kRatioOctaves / 2) * kRatioBinsPerOctave)) + 1;
@@ -47,7 +48,7 @@ double ratio_median(const double* counts)
     for (int b = 0; b < kRatioBins; ++b) {
         if (below + counts[b] >= 0.5 * total) {
             if (b == 0)
-                return std::ldexp(1.0, -kRatioOctaves / 2);
+                return kLowestRatio;
             const double edge = static_cast<double>(b - 1) / kRatioBinsPerOctave - kRatioOctaves / 2;
             if (b == kRatioBins - 1)
                 return std::exp2(edge);
@@ -284,10 +285,10 @@ void SureSurvey::add_band(const BandView& coefficients, const std::vector<float>
                         continue;
                     // White noise of variance v gives HP² of mean v·(1 + 1/count).
                     const double high_pass = image[pixel + c] - neighbours / count;
-                    high_pass_energy[j] += high_pass * high_pass / (1.0 + 1.0 / count);
+                    const double power = high_pass * high_pass / (1.0 + 1.0 / count);
+                    high_pass_energy[j] += power;
                     if (variance > 0)
-                        ratio_counts[j * kRatioBins +
-                                     ratio_bin(high_pass * high_pass / (1.0 + 1.0 / count) / variance)] += 1;
+                        ratio_counts[j * kRatioBins + ratio_bin(power / variance)] += 1;
                 }
             }
             for (int k = 1; k < candidates; ++k) {
@@ -345,14 +346,18 @@ ModeFilterPlan SureSurvey::finish(int fixed_modes, double noise_scale_cap) const
     const double noise = energy[m_modes];
     const double* high_pass_energy = energy + m_modes + 1;
     const double* ratio_counts = high_pass_energy + m_modes;
+    std::vector<double> ratio_medians(static_cast<std::size_t>(m_modes));
+    for (int j = 0; j < m_modes; ++j)
+        ratio_medians[j] = ratio_median(ratio_counts + j * kRatioBins);
     // The later half of the surveyed modes are the most nearly pure noise: their
     // mean ratio over their median is what the noise's spread of ratios gives
     // (more than a Gaussian's 2.2 on rendered noise, heterogeneous from pixel to
     // pixel, and more in the modes that gather its noisiest pixels): the largest.
     double noise_mean_per_median = 0;
     for (int j = m_modes / 2; j < m_modes && noise > 0; ++j)
-        if (const double median = ratio_median(ratio_counts + j * kRatioBins); median > 0)
-            noise_mean_per_median = std::max(noise_mean_per_median, high_pass_energy[j] / noise / median);
+        if (ratio_medians[j] > 0)
+            noise_mean_per_median =
+                std::max(noise_mean_per_median, high_pass_energy[j] / noise / ratio_medians[j]);
 
     ModeFilterPlan plan;
     plan.candidates = m_candidates;
@@ -374,8 +379,7 @@ ModeFilterPlan SureSurvey::finish(int fixed_modes, double noise_scale_cap) const
         if (noise_mean_per_median > 0 && noise_scale_cap <= kMaximumNoiseScale &&
             choice.noise_scale >= noise_scale_cap)
             choice.noise_scale =
-                std::min(choice.noise_scale,
-                         std::max(1.0, ratio_median(ratio_counts + j * kRatioBins) * noise_mean_per_median));
+                std::min(choice.noise_scale, std::max(1.0, ratio_medians[j] * noise_mean_per_median));
         const double mode_noise = noise * choice.noise_scale;
         choice.unfiltered_sure = mode_noise;  // identity: ‖c − c‖² + 2 Σ v − Σ v
         choice.sure = mode_noise;
