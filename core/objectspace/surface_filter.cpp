@@ -73,12 +73,10 @@ FilteredModes filter_modes(const SurfaceCells& cells, const SurfaceModes& modes,
 
 struct SurfaceFilter::State {
     State(double window_radius, SurfaceNeighbours neighbours, const SurfaceShot& shot)
-        : window(window_radius), window_neighbours(std::move(neighbours)), shot(shot)
+        : window_neighbours(std::move(neighbours)),
+          window_members(window_neighbours.counts_within(window_radius)), shot(shot)
     {
-        for (std::int64_t p = 0; p < window_neighbours.count(); ++p)
-            window_members.push_back(window_neighbours.count_within(p, window));
     }
-    double window;
     SurfaceNeighbours window_neighbours;
     std::vector<int> window_members; // per point: its window's size, itself included
     const SurfaceShot& shot;
@@ -112,7 +110,8 @@ SurfaceFilter::SurfaceFilter(const SurfaceSamples& samples, const SurfaceFilterO
     const double spacing = samples.spacing;
     m_state = std::make_unique<State>(options.window_spacings * spacing, std::move(window), shot);
     State& state = *m_state;
-    state.noise = surface_noise_variance(state.window_neighbours, state.window, shot, options.kept_modes);
+    state.noise =
+        surface_noise_variance(state.window_neighbours, state.window_members, shot, options.kept_modes);
 
     std::optional<SurfaceCells> cells;
     m_choice.risks.assign(1, 0.0);

@@ -48,6 +48,14 @@ std::int64_t SurfaceNeighbours::bytes() const
                                      m_distances.size() * sizeof(float));
 }
 
+std::vector<int> SurfaceNeighbours::counts_within(double radius) const
+{
+    std::vector<int> counts(static_cast<std::size_t>(count()));
+    for (std::int64_t p = 0; p < count(); ++p)
+        counts[static_cast<std::size_t>(p)] = count_within(p, radius);
+    return counts;
+}
+
 int SurfaceNeighbours::count_within(std::int64_t p, double radius) const
 {
     const float* d2 = distances_squared(p);

@@ -28,6 +28,8 @@ public:
     std::int64_t bytes() const;
     /// How many of p's neighbours (itself first) lie within `radius` metres.
     int count_within(std::int64_t p, double radius) const;
+    /// count_within(p, radius) of every point p.
+    std::vector<int> counts_within(double radius) const;
 
 private:
     std::vector<std::int64_t> m_first; // CSR offsets, count + 1

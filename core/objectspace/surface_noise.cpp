@@ -9,8 +9,9 @@
 
 namespace modestack::objectspace {
 
-std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, double window,
-                                           const SurfaceShot& shot, int kept_modes)
+std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours,
+                                           const std::vector<int>& members, const SurfaceShot& shot,
+                                           int kept_modes)
 {
     const std::int64_t count = neighbours.count();
     const int frame_count = shot.frames();
@@ -18,9 +19,6 @@ std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, 
     // Per point: Σ_t d², a frame at a time (each point's sum in frame order:
     // the same bits for any thread count), scaled to s² × frames by 1 / (1 + 1/k).
     std::vector<double> energy(static_cast<std::size_t>(count) * ch, 0.0), noise(energy.size(), 0.0);
-    std::vector<int> members(static_cast<std::size_t>(count)); // p's window, itself included: found once
-    for (std::int64_t p = 0; p < count; ++p)
-        members[p] = neighbours.count_within(p, window);
     std::vector<float> noisy(static_cast<std::size_t>(shot.frame_values));
     for (int t = 0; t < frame_count; ++t) {
         shot.read_noisy(t, noisy.data());

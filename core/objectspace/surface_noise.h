@@ -14,10 +14,12 @@
 namespace modestack::objectspace {
 
 /// s², the variance of one noisy value, per point and channel ([point][channel]),
-/// from the residuals of `shot`'s frames over the neighbours within `window` metres.
-/// `rank`: N of the rebuild.
+/// from the residuals of `shot`'s frames over each point's window: its first
+/// `window_members[p]` neighbours (itself included; neighbours.counts_within of
+/// the window's radius). `kept_modes`: N of the rebuild.
 /// The frames' inputs are read one at a time, in order.
-std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours, double window,
-                                           const SurfaceShot& shot, int kept_modes);
+std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours,
+                                           const std::vector<int>& window_members, const SurfaceShot& shot,
+                                           int kept_modes);
 
 } // namespace modestack::objectspace

@@ -77,7 +77,7 @@ std::vector<double> noise_of(Field& field, double window)
     shot.channels = 2;
     shot.frame_values = static_cast<std::int64_t>(field.noisy[0].size());
     const objectspace::SurfaceNeighbours neighbours(field.samples, window, 0.9);
-    return objectspace::surface_noise_variance(neighbours, window, shot, 1);
+    return objectspace::surface_noise_variance(neighbours, neighbours.counts_within(window), shot, 1);
 }
 
 } // namespace
