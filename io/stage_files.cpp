@@ -17,7 +17,8 @@ static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "stage files hold littl
 
 // The first line of every stage file. Its number changes with the layout: 2 added
 // the input's roughness (statistics) and each frame's noise factor (solve).
-constexpr const char* kMagic = "modestack stage file 3"; // 3: survey rows count each mode's high-pass ratios
+// 3: survey rows count each mode's high-pass ratios; 4: modes files hold each row's bias posterior.
+constexpr const char* kMagic = "modestack stage file 4";
 constexpr const char* kMagicPrefix = "modestack stage file ";
 
 // Throws a one-line error unless `line` is this version's first line.
@@ -418,6 +419,35 @@ denoise::SolvedSums read_solve(const StageBytes& solve, const ShotFingerprint& f
     }
 }
 
+namespace {
+
+// A row's bias posterior as floats: its slopes, then its offsets.
+constexpr std::size_t kBiasFloatsPerRow = 2 * lowrank::kBiasBins;
+
+std::vector<float> bias_floats(const std::vector<lowrank::BiasPosterior>& rows)
+{
+    std::vector<float> floats;
+    floats.reserve(rows.size() * kBiasFloatsPerRow);
+    for (const lowrank::BiasPosterior& row : rows) {
+        floats.insert(floats.end(), row.slope.begin(), row.slope.end());
+        floats.insert(floats.end(), row.offset.begin(), row.offset.end());
+    }
+    return floats;
+}
+
+std::vector<lowrank::BiasPosterior> bias_rows(const std::vector<float>& floats)
+{
+    std::vector<lowrank::BiasPosterior> rows(floats.size() / kBiasFloatsPerRow);
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+        const float* row = floats.data() + r * kBiasFloatsPerRow;
+        std::copy_n(row, lowrank::kBiasBins, rows[r].slope.begin());
+        std::copy_n(row + lowrank::kBiasBins, lowrank::kBiasBins, rows[r].offset.begin());
+    }
+    return rows;
+}
+
+} // namespace
+
 std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& solve, const std::string& surveys,
                         const denoise::ModeImages& band)
 {
@@ -437,6 +467,7 @@ std::string modes_bytes(const ShotFingerprint& fingerprint, const StageBytes& so
     }
     for (const std::vector<float>* values : {&band.residual, &band.output, &band.noise_variance, &band.gains})
         payload.add_floats(*values);
+    payload.add_floats(bias_floats(band.bias));
     return stage_bytes(header, payload);
 }
 
@@ -454,7 +485,8 @@ std::vector<denoise::ModeImages> read_modes(const std::vector<StageBytes>& input
             const std::size_t samples = static_cast<std::size_t>(width) * channels * (end - begin);
             const std::size_t floats = samples * (header.at("residual_modes").get<std::size_t>() +
                                                   header.at("output_modes").get<std::size_t>() + 1) +
-                                       samples / channels * header.at("gain_modes").get<std::size_t>();
+                                       samples / channels * header.at("gain_modes").get<std::size_t>() +
+                                       static_cast<std::size_t>(end - begin) * kBiasFloatsPerRow;
             return header.value("floats", std::size_t(0)) == floats &&
                    header.at("doubles").get<std::size_t>() == 3 * header.at("patches").get<std::size_t>();
         });
@@ -479,6 +511,8 @@ std::vector<denoise::ModeImages> read_modes(const std::vector<StageBytes>& input
         band.output = payload.floats(samples * band.output_modes);
         band.noise_variance = payload.floats(samples);
         band.gains = payload.floats(samples / channels * band.gain_modes);
+        band.bias = bias_rows(
+            payload.floats(static_cast<std::size_t>(band.row_end - band.row_begin) * kBiasFloatsPerRow));
         if (!shot.empty() && (band.residual_modes != shot.front().residual_modes ||
                               band.output_modes != shot.front().output_modes ||
                               band.gain_modes != shot.front().gain_modes))

@@ -202,7 +202,18 @@ TaskResult<ModeImages> modes_task(const PassContext& context, const SolvedSums& 
         const std::int64_t offset = (row - band.row_begin) * row_samples;
         const lowrank::MutableBandView residual{images.residual.data() + first, valid, images.residual_modes,
                                                 samples};
-        rebuilder.prepare(band, row, end, &residual, nullptr);
+        // Each frame's windowed residual mean goes over the band's own input
+        // rows (a task band is read afresh, nothing reads them again): the
+        // rows' bias priors need every frame's.
+        float* means = band.data + offset;
+        rebuilder.prepare(band, row, end, &residual, nullptr, means, band.stride);
+        const auto [residual_begin, residual_end] = rebuilder.sigma_rows(band, row, end);
+        const lowrank::ImageBandShape residual_shape{shape.width, residual_end - residual_begin,
+                                                     shape.channels};
+        const std::vector<lowrank::BiasPosterior> posteriors = lowrank::row_bias_posteriors(
+            residual_shape, row - residual_begin, end - residual_begin, rebuilder.confidence(),
+            rebuilder.noise_variance().data(), modes.leverages, means, band.stride);
+        images.bias.insert(images.bias.end(), posteriors.begin(), posteriors.end());
         for (int j = 0; j < images.output_modes; ++j)
             std::copy_n(rebuilder.coefficients().begin() + j * band.rows + offset, valid,
                         images.output.begin() + j * samples + first);
@@ -322,7 +333,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                                               buffers.kept_noise.data());
             lowrank::frame_sigma(own.cleaned.data(), buffers.unfiltered.data(), image, 0, shape.height,
                                  rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
-                                 shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr,
+                                 shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, shot.bias.data(),
                                  buffers.sigma.data());
             std::vector<float>& output = shot.output_modes > 0 ? buffers.output : buffers.unfiltered;
             if (shot.output_modes > 0)

@@ -137,13 +137,18 @@ void RebuildPass::add_rows(int row, int end)
         rebuilder.kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes, rebuilder.gains().data(), valid,
                                       kept_noise.data());
     };
+    // Each row's bias prior from all its frames' means, before any frame's sigma.
+    const std::vector<lowrank::BiasPosterior> posteriors =
+        lowrank::row_bias_posteriors(residual_shape, first_valid, last_valid, rebuilder.confidence(),
+                                     rebuilder.noise_variance().data(), modes.leverages, sigma, sigma_stride);
     tbb::parallel_for(0, frames, [&](int t) {
         std::vector<float>& kept_noise = m_kept_noise_of_worker.local(); // nothing below runs in parallel
         if (filter)
             kept_noise_of(t, kept_noise);
         lowrank::sigma_from_mean(residual_shape, first_valid, last_valid, rebuilder.confidence(),
                                  rebuilder.noise_variance().data(), modes.leverages(t),
-                                 filter ? kept_noise.data() : nullptr, sigma + t * sigma_stride);
+                                 filter ? kept_noise.data() : nullptr, posteriors.data(),
+                                 sigma + t * sigma_stride);
     });
     lowrank::MutableBandView output_view{rebuilder.rebuilt().data() + (first - residual_begin) * row_samples,
                                          valid, frames, rebuilt_stride};

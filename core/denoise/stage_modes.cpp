@@ -38,16 +38,19 @@ ShotModes join_modes_bands(const std::vector<ModeImages>& bands, const ShotShape
         const std::int64_t band_pixels = band_samples / shape.channels;
         if (band.row_begin != covered || band.row_end <= band.row_begin || band.row_end > shape.height ||
             band.residual_modes != residual_modes || band.output_modes != output_modes ||
-            band.gain_modes != gain_modes || band.residual.size() != static_cast<size_t>(band_samples * residual_modes) ||
+            band.gain_modes != gain_modes ||
+            band.residual.size() != static_cast<size_t>(band_samples * residual_modes) ||
             band.output.size() != static_cast<size_t>(band_samples * output_modes) ||
             band.noise_variance.size() != static_cast<size_t>(band_samples) ||
-            band.gains.size() != static_cast<size_t>(band_pixels * gain_modes))
+            band.gains.size() != static_cast<size_t>(band_pixels * gain_modes) ||
+            band.bias.size() != static_cast<size_t>(band.row_end - band.row_begin))
             throw internal_error("the modes bands do not fit the shot and its solve");
         const std::int64_t first = row_samples * band.row_begin;
         place_images(band.residual, residual_modes, band_samples, shot.residual, samples, first);
         place_images(band.output, output_modes, band_samples, shot.output, samples, first);
         place_images(band.noise_variance, 1, band_samples, shot.noise_variance, samples, first);
         place_images(band.gains, gain_modes, band_pixels, shot.gains, pixels, first / shape.channels);
+        shot.bias.insert(shot.bias.end(), band.bias.begin(), band.bias.end());
         for (const ModeImages::Patch& patch : band.patches) {
             if (patch.frame < 0 || patch.frame >= shape.frames || patch.sample < 0 || patch.sample >= band_samples)
                 throw internal_error("a modes band's patch lies outside it");

@@ -19,6 +19,7 @@ struct ShotModes {
     std::vector<float> output;
     std::vector<float> noise_variance;
     std::vector<float> gains;
+    std::vector<lowrank::BiasPosterior> bias;             ///< per row
     std::vector<std::vector<ModeImages::Patch>> patches;  ///< per frame, samples counted from row 0
 };
 

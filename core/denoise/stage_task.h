@@ -22,6 +22,7 @@
 #pragma once
 
 #include "core/denoise/repeating_noise.h"
+#include "core/lowrank/bias_prior.h"
 #include "core/lowrank/gram.h"
 #include "core/lowrank/outliers.h"
 
@@ -65,6 +66,7 @@ struct ModeImages {
     std::vector<float> output;          ///< output_modes images (filtered, shrunk)
     std::vector<float> noise_variance;  ///< sigma's s² per sample (lowrank/confidence.h)
     std::vector<float> gains;           ///< gain_modes images of one value per pixel
+    std::vector<lowrank::BiasPosterior> bias; ///< sigma's bias posterior per row (lowrank/bias_prior.h)
     /// An input value that outlier cleaning changed: frame, sample in the band, value.
     struct Patch {
         int frame = 0;

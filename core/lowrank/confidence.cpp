@@ -273,46 +273,101 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
         noise_variance[i] = static_cast<float>(energy[static_cast<std::size_t>(i)] / degrees_of_freedom);
 }
 
-void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape, int valid_y0,
-                 int valid_y1, const ConfidenceOptions& options, const float* noise_variance, double leverage,
-                 const float* kept_noise, float* sigma)
+void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape,
+                 int valid_y0, int valid_y1, const ConfidenceOptions& options, const float* noise_variance,
+                 double leverage, const float* kept_noise, const BiasPosterior* posteriors, float* sigma)
 {
     if (valid_y0 < 0 || valid_y1 > shape.height || valid_y0 > valid_y1 || options.radius < 0)
         throw internal_error("frame_sigma: output rows outside the band");
     ResidualWindows windows(shape, options.radius, valid_y0, valid_y1);
     windows.compute(noisy_frame, rebuilt_frame, sigma, nullptr);
-    sigma_from_mean(shape, valid_y0, valid_y1, options, noise_variance, leverage, kept_noise, sigma);
+    sigma_from_mean(shape, valid_y0, valid_y1, options, noise_variance, leverage, kept_noise, posteriors,
+                    sigma);
 }
 
-void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1, const ConfidenceOptions& options,
-                     const float* noise_variance, double leverage, const float* kept_noise, float* sigma)
+namespace {
+
+// Calls visit(first, last, noise_share) for runs of samples [first, last) of
+// the output rows (counted from valid_y0) that share a window size, where
+// noise_share · s² is the noise variance τ² of their windowed mean.
+template <typename Visit>
+void for_each_window_run(const ImageBandShape& shape, int valid_y0, int valid_y1,
+                         const ConfidenceOptions& options, double leverage, Visit&& visit)
 {
-    // The windowed mean of pure noise has variance s²(1 − h_t)/|W|; what the
-    // squared mean holds beyond that is coherent missed content.
-    const auto finish = [&](std::int64_t first, std::int64_t last, double window) {
-        const double noise_share = options.bias_significance * (1.0 - leverage) / window;
-        for (std::int64_t i = first; i < last; ++i) {
-            const double mean = sigma[i], variance = noise_variance[i];
-            const double bias = std::max(0.0, mean * mean - variance * noise_share);
-            const double kept = kept_noise ? static_cast<double>(kept_noise[i]) : leverage;
-            sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias));
-        }
-    };
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
+    const auto share = [&](double window) { return options.bias_significance * (1.0 - leverage) / window; };
     for (int y = valid_y0; y < valid_y1; ++y) {
         const std::int64_t row = (y - valid_y0) * row_length;
         for_each_window_shape(
             shape.width, options.radius,
             [&](int x) {
                 const std::int64_t first = row + static_cast<std::int64_t>(x) * shape.channels;
-                finish(first, first + shape.channels, window_size(shape, options.radius, x, y));
+                visit(y, first, first + shape.channels, share(window_size(shape, options.radius, x, y)));
             },
             [&](int inner_first, int inner_end) {
-                finish(row + static_cast<std::int64_t>(inner_first) * shape.channels,
-                       row + static_cast<std::int64_t>(inner_end) * shape.channels,
-                       window_size(shape, options.radius, inner_first, y));
+                visit(y, row + static_cast<std::int64_t>(inner_first) * shape.channels,
+                      row + static_cast<std::int64_t>(inner_end) * shape.channels,
+                      share(window_size(shape, options.radius, inner_first, y)));
             });
     }
+}
+
+} // namespace
+
+void count_bias_ratios(const ImageBandShape& shape, int valid_y0, int valid_y1,
+                       const ConfidenceOptions& options, const float* noise_variance, double leverage,
+                       const float* means, BiasRatioCounts* counts)
+{
+    for_each_window_run(
+        shape, valid_y0, valid_y1, options, leverage,
+        [&](int y, std::int64_t first, std::int64_t last, double noise_share) {
+            BiasRatioCounts& row = counts[y - valid_y0];
+            for (std::int64_t i = first; i < last; ++i) {
+                const double mean = means[i];
+                ++row[static_cast<std::size_t>(bias_bin(mean * mean / (noise_variance[i] * noise_share)))];
+            }
+        });
+}
+
+std::vector<BiasPosterior> row_bias_posteriors(const ImageBandShape& shape, int valid_y0, int valid_y1,
+                                               const ConfidenceOptions& options, const float* noise_variance,
+                                               const Eigen::VectorXd& leverages, const float* means,
+                                               std::int64_t means_stride)
+{
+    const int rows = valid_y1 - valid_y0;
+    const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
+    std::vector<BiasPosterior> posteriors(static_cast<std::size_t>(std::max(rows, 0)));
+    tbb::parallel_for(0, std::max(rows, 0), [&](int r) {
+        BiasRatioCounts counts{};
+        const std::int64_t offset = r * row_length;
+        for (Eigen::Index t = 0; t < leverages.size(); ++t)
+            count_bias_ratios(shape, valid_y0 + r, valid_y0 + r + 1, options, noise_variance + offset,
+                              leverages(t), means + t * means_stride + offset, &counts);
+        posteriors[static_cast<std::size_t>(r)] = fit_bias_posterior(counts);
+    });
+    return posteriors;
+}
+
+void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1,
+                     const ConfidenceOptions& options, const float* noise_variance, double leverage,
+                     const float* kept_noise, const BiasPosterior* posteriors, float* sigma)
+{
+    // The windowed mean of pure noise has variance τ² = s²(1 − h_t)/|W|; the
+    // bias is the posterior mean of b² under the row's prior (bias_prior.h).
+    for_each_window_run(shape, valid_y0, valid_y1, options, leverage,
+                        [&](int y, std::int64_t first, std::int64_t last, double noise_share) {
+                            const BiasPosterior& posterior = posteriors[y - valid_y0];
+                            for (std::int64_t i = first; i < last; ++i) {
+                                const double mean = sigma[i], variance = noise_variance[i];
+                                const double null = variance * noise_share, squared = mean * mean;
+                                const auto bin = static_cast<std::size_t>(bias_bin(squared / null));
+                                const double bias = posterior.slope[bin] * squared +
+                                                    (null > 0 ? posterior.offset[bin] * null : 0.0);
+                                const double kept =
+                                    kept_noise ? static_cast<double>(kept_noise[i]) : leverage;
+                                sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias));
+                            }
+                        });
 }
 
 void confidence_band(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
@@ -328,14 +383,17 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
         throw internal_error("confidence_band: kept noise does not match sigma");
     if (sigma.rows == 0)
         return;
+    // s² and every frame's windowed residual mean (left in sigma), the rows'
+    // bias priors from all frames, then sigma frame by frame: a whole run's steps.
     std::vector<float> noise_variance(static_cast<std::size_t>(sigma.rows));
     residual_noise_variance(noisy, rebuilt, shape, kept_modes, valid_y0, valid_y1, options,
-                            noise_variance.data());
+                            noise_variance.data(), sigma.data, sigma.frame_stride);
+    const std::vector<BiasPosterior> posteriors = row_bias_posteriors(
+        shape, valid_y0, valid_y1, options, noise_variance.data(), leverages, sigma.data, sigma.frame_stride);
     tbb::parallel_for(0, frames, [&](int t) {
-        frame_sigma(noisy.data + t * noisy.frame_stride, rebuilt.data + t * rebuilt.frame_stride, shape, valid_y0,
-                    valid_y1, options, noise_variance.data(), leverages(t),
-                    kept_noise ? kept_noise->data + t * kept_noise->frame_stride : nullptr,
-                    sigma.data + t * sigma.frame_stride);
+        sigma_from_mean(shape, valid_y0, valid_y1, options, noise_variance.data(), leverages(t),
+                        kept_noise ? kept_noise->data + t * kept_noise->frame_stride : nullptr,
+                        posteriors.data(), sigma.data + t * sigma.frame_stride);
     });
 }
 

@@ -11,8 +11,9 @@
 //   d_t  = r_{q,c,t} − mean of its 4-neighbours            (spatial high-pass of r)
 //   s²   = Σ_t mean_{q∈W} d_t² / (1 + 1/4) / (F − N)       (noise variance per frame)
 //   μ_t  = mean_{q∈W} r_{q,c,t}                            (local mean residual)
-//   b_t² = max(0, μ_t² − z·s²(1 − h_t)/|W|)                (missed content: the part of μ_t²
-//                                                           noise cannot explain)
+//   τ_t² = z·s²(1 − h_t)/|W|                                (noise variance of μ_t)
+//   b_t² = E[b² | μ_t, τ_t] under the row's prior            (missed content: the part of μ_t²
+//                                                           noise cannot explain; bias_prior.h)
 //   sigma_t = sqrt(s²·h_t + b_t²)                          (noise kept by the projection,
 //                                                           Var(x̂_t) = s²·h_t, plus bias)
 // Why a high-pass for s²: lighting the modes miss in every frame (a light that
@@ -24,12 +25,19 @@
 // Why the mean and not the mean square for b_t: content the modes miss (an object
 // seen in a few frames) is coherent over the window, so it survives the mean,
 // while noise and single-pixel fireflies (large residuals that barely move x̂)
-// mostly cancel. z = 1 subtracts the expected noise part exactly.
+// mostly cancel. z = 1 counts the mean's noise exactly.
+// Why a learnt prior for b_t: the unbiased max(0, μ_t² − τ_t²) leaves about
+// 0.48·τ_t² on a sample with no bias, far above the noise a wide mode filter
+// keeps; the prior of each image row, fitted to all its frames, shrinks what
+// the noise explains and keeps what it does not (bias_prior.h).
 #pragma once
 
 #include "core/lowrank/band.h"
+#include "core/lowrank/bias_prior.h"
 
 #include <Eigen/Core>
+
+#include <vector>
 
 namespace modestack::lowrank {
 
@@ -76,16 +84,31 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
                              int kept_modes, int valid_y0, int valid_y1, const ConfidenceOptions& options,
                              float* noise_variance, float* means = nullptr, std::int64_t means_stride = 0);
 
-/// ... and sigma of one frame from its noisy and rebuilt values (whole band in
-/// `shape`), s² and the frame's leverage h_t, or its kept noise per sample
-/// (null: h_t). `sigma` receives the output rows.
-void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape, int valid_y0,
-                 int valid_y1, const ConfidenceOptions& options, const float* noise_variance, double leverage,
-                 const float* kept_noise, float* sigma);
+/// ... the bias prior of each output row from every frame's windowed residual
+/// mean (frame t's output rows at means + t · means_stride, `leverages` h_t
+/// of every frame): one posterior per row, rows [valid_y0, valid_y1) ...
+std::vector<BiasPosterior> row_bias_posteriors(const ImageBandShape& shape, int valid_y0, int valid_y1,
+                                               const ConfidenceOptions& options, const float* noise_variance,
+                                               const Eigen::VectorXd& leverages, const float* means,
+                                               std::int64_t means_stride);
 
-/// frame_sigma's second half: `sigma` holds the frame's windowed residual mean of
-/// the output rows on entry (from residual_noise_variance) and its sigma on return.
-void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1, const ConfidenceOptions& options,
-                     const float* noise_variance, double leverage, const float* kept_noise, float* sigma);
+/// ... (its counting step: adds the bins of t² = μ²/τ² of one frame's output rows to
+/// counts[y − valid_y0], for a caller that holds its frames one at a time) ...
+void count_bias_ratios(const ImageBandShape& shape, int valid_y0, int valid_y1,
+                       const ConfidenceOptions& options, const float* noise_variance, double leverage,
+                       const float* means, BiasRatioCounts* counts);
+
+/// ... and sigma of one frame from its noisy and rebuilt values (whole band in
+/// `shape`), s², the frame's leverage h_t, or its kept noise per sample
+/// (null: h_t), and the output rows' posteriors. `sigma` receives the output rows.
+void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape,
+                 int valid_y0, int valid_y1, const ConfidenceOptions& options, const float* noise_variance,
+                 double leverage, const float* kept_noise, const BiasPosterior* posteriors, float* sigma);
+
+/// frame_sigma's second half: `sigma` holds the frame's windowed residual
+/// mean of the output rows on entry (from residual_noise_variance) and its sigma on return.
+void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1,
+                     const ConfidenceOptions& options, const float* noise_variance, double leverage,
+                     const float* kept_noise, const BiasPosterior* posteriors, float* sigma);
 
 } // namespace modestack::lowrank

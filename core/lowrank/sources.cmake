@@ -1,6 +1,7 @@
 # Sources of core/lowrank (one .h/.cpp pair per concept).
 target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/basis.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/bias_prior.cpp
   ${CMAKE_CURRENT_LIST_DIR}/confidence.cpp
   ${CMAKE_CURRENT_LIST_DIR}/gram.cpp
   ${CMAKE_CURRENT_LIST_DIR}/outliers.cpp

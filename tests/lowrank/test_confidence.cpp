@@ -4,6 +4,7 @@
 #include "core/lowrank/confidence.h"
 #include "core/lowrank/gram.h"
 #include "core/lowrank/projection.h"
+#include "core/lowrank/randomized_svd.h"
 #include "tests/lowrank/synthetic.h"
 
 #include <doctest/doctest.h>
@@ -245,4 +246,39 @@ TEST_CASE("sigma of a band with halo rows equals the whole-image sigma, for 1 an
         for (std::int64_t i = 0; i < one.rows; ++i)
             mismatches += one.at(i, t) != whole.at((first_row + radius) * row_length + i, t);
     CHECK(mismatches == 0);
+}
+
+TEST_CASE("sigma of an output that keeps a hundredth of the noise is not the bias term's noise")
+{
+    // A wide mode filter keeps a small share k of the noise (kept_noise = k); the
+    // model is exact (rank 2), so the output's error is that noise alone. The
+    // old bias term max(0, μ² − τ²) added about 0.48·τ² ≈ 0.02·s² everywhere,
+    // twenty times the kept noise; the prior learnt per row shrinks it away.
+    const FrameMatrix clean = clean_images();
+    const FrameMatrix noisy = add_noise(clean, 9);
+    const Rebuild result = rebuild(noisy);
+    constexpr double kKept = 0.002;
+    FrameMatrix kept(noisy.rows, kFrames);
+    std::fill(kept.data.begin(), kept.data.end(), static_cast<float>(kKept));
+    FrameMatrix sigma(noisy.rows, kFrames);
+    const BandView kept_view = kept.view();
+    confidence_band(noisy.view(), result.rebuilt.view(), kShape, result.leverage, kRank, 0, kHeight,
+                    ConfidenceOptions{}, sigma.mutable_view(), &kept_view);
+    // The filtered output: the truth plus √k of each sample's noise.
+    const Eigen::MatrixXd noise = gaussian_matrix(static_cast<int>(clean.rows), kFrames, 21);
+    double error = 0, variance = 0;
+    for (int t = 0; t < kFrames; ++t)
+        for (int y = 0; y < kHeight; ++y)
+            for (int x = 0; x < kWidth; ++x)
+                for (int c = 0; c < kChannels; ++c) {
+                    const std::int64_t k = sample(x, y, c);
+                    const double deviation = 0.02 + 0.15 * x / (kWidth - 1.0);
+                    const double e = std::sqrt(kKept) * deviation * noise(k, t);
+                    error += e * e;
+                    variance += double(sigma.at(k, t)) * sigma.at(k, t);
+                }
+    const double ratio = std::sqrt(error / variance);
+    MESSAGE("RMS(error) / RMS(sigma): " << ratio);
+    CHECK(ratio >= 0.8);
+    CHECK(ratio <= 1.25);
 }
