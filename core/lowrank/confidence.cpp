@@ -361,8 +361,9 @@ void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1,
                                 const double mean = sigma[i], variance = noise_variance[i];
                                 const double null = variance * noise_share, squared = mean * mean;
                                 const auto bin = static_cast<std::size_t>(bias_bin(squared / null));
-                                const double bias = posterior.slope[bin] * squared +
-                                                    (null > 0 ? posterior.offset[bin] * null : 0.0);
+                                // τ² = 0 (no noise) lands in the top bin, slope 1: the bias is μ².
+                                const double bias =
+                                    posterior.slope[bin] * squared + posterior.offset[bin] * null;
                                 const double kept =
                                     kept_noise ? static_cast<double>(kept_noise[i]) : leverage;
                                 sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias));
