@@ -78,7 +78,8 @@ Subcommand add_denoise_command(CLI::App& parent)
                       "Keep fireflies as they are (default: clamp them, spreading their energy over the pixel's "
                       "frames)");
     command->add_option("--firefly-k", options->firefly_k,
-                        "Firefly threshold: temporal median + k x 1.4826 x MAD of the pixel")
+                        "Firefly threshold: temporal median + k x 1.4826 x MAD of the pixel, raised by light its row "
+                        "neighbours share in that frame")
         ->check(CLI::PositiveNumber);
     command->add_option("--sigma-radius", options->sigma_radius,
                         "Spatial pooling radius of sigma, in pixels (0 or more)");

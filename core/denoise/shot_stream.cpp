@@ -101,7 +101,7 @@ void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning clea
         std::uint8_t* marks =
             m_plan.in_memory || m_cleaned_samples.empty() ? nullptr : m_cleaned_samples.data() + first_sample;
         const lowrank::OutlierCounts found =
-            lowrank::clean_outliers(band.view(m_shape.frames), m_outlier_options, marks);
+            lowrank::clean_outliers(band.view(m_shape.frames), m_outlier_options, marks, row_layout());
         m_outliers.non_finite += found.non_finite;
         m_outliers.fireflies += found.fireflies;
     }
@@ -120,9 +120,10 @@ void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning clea
 void ShotStream::clean_again(const lowrank::MutableBandView& rows, std::int64_t first_sample)
 {
     if (m_cleaned_samples.empty()) // no counted read marked them: clean in full
-        lowrank::clean_outliers(rows, m_outlier_options, nullptr);
+        lowrank::clean_outliers(rows, m_outlier_options, nullptr, row_layout());
     else
-        lowrank::clean_marked_outliers(rows, m_outlier_options, m_cleaned_samples.data() + first_sample);
+        lowrank::clean_marked_outliers(rows, m_outlier_options, m_cleaned_samples.data() + first_sample,
+                                       row_layout());
 }
 
 bool ShotStream::roll_band(Band& band, int row_begin, int row_end, bool with_pass_through)
@@ -232,7 +233,7 @@ void ShotStream::finish_whole_shot()
 {
     measure_roughness(m_whole);
     const lowrank::OutlierCounts found =
-        lowrank::clean_outliers(m_whole.view(m_shape.frames), m_outlier_options, nullptr);
+        lowrank::clean_outliers(m_whole.view(m_shape.frames), m_outlier_options, nullptr, row_layout());
     m_outliers.non_finite += found.non_finite;
     m_outliers.fireflies += found.fireflies;
     m_whole_read_ahead = true;

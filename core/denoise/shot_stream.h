@@ -58,6 +58,8 @@ public:
     /// Each frame's noise factor (frame_noise.h) once the first pass has read every row.
     std::vector<double> frame_noise_factors() const;
     std::int64_t row_samples() const { return static_cast<std::int64_t>(m_shape.width) * m_shape.channels; }
+    /// How a band's rows lie in the image, for the firefly test's row neighbours.
+    lowrank::ImageRowLayout row_layout() const { return {m_shape.width, m_shape.channels}; }
 
     /// Visits the shot in bands in a fixed order: the kept shot when it is in
     /// memory, otherwise a fresh read of each band. The first such pass counts
@@ -148,8 +150,8 @@ private:
     int m_passes = 0;
     lowrank::OutlierCounts m_outliers;
     std::vector<double> m_row_roughness; // [row][frame], by the first read of each row
-    Band m_whole; // the kept shot, when it fits in memory
-    bool m_whole_read_ahead = false; // read and cleaned by read_whole_frames and finish_whole_shot
+    Band m_whole;                        // the kept shot, when it fits in memory
+    bool m_whole_read_ahead = false;     // read and cleaned by read_whole_frames and finish_whole_shot
     // Streaming: 1 for each sample whose row (over frames) the outlier cleaning changed.
     std::vector<std::uint8_t> m_cleaned_samples;
     struct PatchRows {

@@ -1,37 +1,94 @@
 #include "core/lowrank/outliers.h"
 
+#include "core/common/error.h"
+#include "core/common/progress.h"
 #include "core/lowrank/row_median.h"
-#include "core/lowrank/tiles.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <vector>
 
 namespace modestack::lowrank {
 namespace {
 
-// Scratch for one row.
-struct RowScratch {
-    std::vector<double> row;
-    std::vector<double> to_median;  // the finite samples, |samples| or deviations a median is taken of
-    std::vector<double> select_a, select_b;  // row_median's work space
+constexpr double kNoClamp = std::numeric_limits<double>::infinity();
 
-    void resize(std::size_t frames)
+// What the first look at one row found.
+struct RowStats {
+    double median = 0;           // of the row, its non-finite samples replaced
+    double fill = 0;             // what a non-finite sample becomes: the median of the finite ones
+    double typical = 0;          // the median of |x|
+    double spread = 0;           // max(MAD, floor): the plain threshold's spread
+    double threshold = kNoClamp; // the plain threshold; kNoClamp: no sample above it
+    std::int64_t non_finite = 0; // samples replaced
+};
+
+// Scratch for one group of rows.
+struct GroupScratch {
+    std::vector<float> values; // the group's samples as read, [row][frame]
+    std::vector<RowStats> stats;
+    std::vector<double> row;
+    std::vector<double> to_median; // the finite samples, |samples| or deviations a median is taken of
+    std::vector<double> select_a, select_b; // row_median's work space
+
+    void resize(std::size_t rows, std::size_t frames)
     {
+        values.resize(rows * frames);
+        stats.resize(rows);
         for (std::vector<double>* buffer : {&row, &to_median, &select_a, &select_b})
             buffer->resize(frames);
     }
-    double median(const std::vector<double>& values, std::size_t count)
+    double median(const std::vector<double>& of, std::size_t count)
     {
-        return row_median(values.data(), count, select_a.data(), select_b.data());
+        return row_median(of.data(), count, select_a.data(), select_b.data());
     }
+    const float* samples(std::int64_t r) const { return &values[static_cast<std::size_t>(r) * row.size()]; }
 };
 
-// Clamps the fireflies of scratch.row (see outliers.h); true when it changed it.
-bool clamp_fireflies(RowScratch& scratch, const OutlierOptions& options, OutlierCounts& counts)
+// Copies row r's samples into scratch.row, each non-finite one replaced by the
+// median of the finite ones (0 if none); counts them and keeps that median in `stats`.
+void first_load(GroupScratch& scratch, std::int64_t r, RowStats& stats)
+{
+    const float* values = scratch.samples(r);
+    const std::size_t frames = scratch.row.size();
+    std::size_t finite = 0;
+    for (std::size_t t = 0; t < frames; ++t) {
+        const double value = values[t];
+        scratch.row[t] = value;
+        if (std::isfinite(value))
+            scratch.to_median[finite++] = value;
+    }
+    stats.non_finite = static_cast<std::int64_t>(frames - finite);
+    if (stats.non_finite == 0)
+        return;
+    stats.fill = scratch.median(scratch.to_median, finite);
+    for (double& value : scratch.row)
+        if (!std::isfinite(value))
+            value = stats.fill;
+}
+
+// Loads row r again as first_load left it.
+void load(GroupScratch& scratch, std::int64_t r, const RowStats& stats)
+{
+    const float* values = scratch.samples(r);
+    for (std::size_t t = 0; t < scratch.row.size(); ++t)
+        scratch.row[t] = std::isfinite(values[t]) ? values[t] : stats.fill;
+}
+
+// The median of scratch.row (NaN/Inf replaced) and, when a firefly check is
+// asked, the plain threshold median_t + k·1.4826·max(MAD_t, floor) if some sample
+// lies above it (outliers.h).
+void row_statistics(GroupScratch& scratch, const OutlierOptions& options, bool check, RowStats& stats)
 {
     const std::size_t frames = scratch.row.size();
-    const double median = scratch.median(scratch.row, frames);
+    const double median = stats.median = scratch.median(scratch.row, frames);
+    if (!check)
+        return;
     const auto [lowest, highest] = std::minmax_element(scratch.row.begin(), scratch.row.end());
     // The median of |x|: for a row with no negative value (radiance) that is the median.
     double typical_magnitude = median;
@@ -40,6 +97,7 @@ bool clamp_fireflies(RowScratch& scratch, const OutlierOptions& options, Outlier
             scratch.to_median[t] = std::abs(scratch.row[t]);
         typical_magnitude = scratch.median(scratch.to_median, frames);
     }
+    stats.typical = typical_magnitude;
     const double floor_spread = std::max(options.mad_floor_fraction * typical_magnitude, 1e-30);
     const auto threshold_of = [&](double mad) {
         return median + options.firefly_k * 1.4826 * std::max(mad, floor_spread);
@@ -50,7 +108,7 @@ bool clamp_fireflies(RowScratch& scratch, const OutlierOptions& options, Outlier
     // that would put the threshold at the largest sample; D ≤ MAD when fewer than
     // half of the deviations lie below D.
     if (*highest <= threshold_of(0.0))
-        return false;
+        return;
     std::size_t below = 0;
     const double enough = (*highest - median) / (options.firefly_k * 1.4826);
     for (std::size_t t = 0; t < frames; ++t) {
@@ -58,118 +116,179 @@ bool clamp_fireflies(RowScratch& scratch, const OutlierOptions& options, Outlier
         below += scratch.to_median[t] < enough ? 1 : 0;
     }
     if (below < (frames + 1) / 2 && *highest <= threshold_of(enough))
-        return false;
+        return;
     const double mad = scratch.median(scratch.to_median, frames);
-    const double threshold = threshold_of(mad);
-    double excess = 0;
-    for (double& value : scratch.row)
-        if (value > threshold) {
-            excess += value - threshold;
-            value = threshold;
-            ++counts.fireflies;
-        }
-    if (excess <= 0)
-        return false;
-    const double share = excess / static_cast<double>(frames);
-    for (double& value : scratch.row)
-        value += share;
-    return true;
+    if (*highest <= threshold_of(mad))
+        return;
+    stats.spread = std::max(mad, floor_spread);
+    stats.threshold = threshold_of(mad);
 }
 
-// Cleans row i of the band, whose F samples `values` holds contiguously.
-OutlierCounts clean_row(const MutableBandView& band, std::int64_t i, const float* values,
-                        const OutlierOptions& options, RowScratch& scratch, bool* changed_out = nullptr)
+// Geometry of one group: rows of `channels` interleaved channels, or no neighbours.
+struct GroupShape {
+    std::int64_t rows = 0;
+    int frames = 0;
+    int channels = 0; // 0: the rows are not pixels of an image row
+};
+
+// How far sample (r, t) of the group stands above its median where its row
+// neighbours all stand above theirs: the light they share in frame t (outliers.h).
+double shared_excess(const GroupScratch& scratch, const GroupShape& shape, std::int64_t r, int t)
+{
+    const auto excess = [&](std::int64_t q) {
+        if (q < 0 || q >= shape.rows)
+            return -kNoClamp;
+        const RowStats& stats = scratch.stats[static_cast<std::size_t>(q)];
+        double value = scratch.values[static_cast<std::size_t>(q * shape.frames + t)];
+        if (!std::isfinite(value))
+            value = stats.fill;
+        return value - stats.median;
+    };
+    const std::int64_t c = shape.channels;
+    const double left = std::min(excess(r - c), excess(r - 2 * c));
+    const double right = std::min(excess(r + c), excess(r + 2 * c));
+    return std::max({left, right, 0.0});
+}
+
+// The threshold of sample t of a row with a plain threshold, lifted by the light
+// its neighbours share in that frame, the spread scaled to that light's level.
+double lifted_threshold(const RowStats& stats, const OutlierOptions& options, double shared)
+{
+    if (!(shared > 0))
+        return stats.threshold;
+    const double expected = stats.median + shared;
+    const double level = stats.typical > 0 && expected > stats.typical ? expected / stats.typical : 1.0;
+    const double spread = std::max(stats.spread * level, options.mad_floor_fraction * std::abs(expected));
+    return expected + options.firefly_k * 1.4826 * spread;
+}
+
+// Cleans the group's rows [first, first + shape.rows) of `band` (only those
+// `only` marks, when given); returns what it changed and marks `changed_rows`.
+OutlierCounts clean_group(const MutableBandView& band, std::int64_t first, const GroupShape& shape,
+                          const OutlierOptions& options, const std::uint8_t* only, std::uint8_t* changed_rows,
+                          GroupScratch& scratch)
 {
     OutlierCounts counts;
-    const int frames = band.frames;
-    std::size_t finite = 0;
+    const std::int64_t rows = shape.rows;
+    const int frames = shape.frames;
+    const auto cleaned = [&](std::int64_t r) { return only == nullptr || only[first + r] != 0; };
+    const bool fireflies = options.fireflies && frames >= 3;
+    const std::int64_t reach = fireflies ? 2 * static_cast<std::int64_t>(shape.channels) : 0;
+    // Rows whose statistics are needed: those cleaned and, for the shared
+    // excess, their row neighbours.
+    const auto needed = [&](std::int64_t r) {
+        for (std::int64_t q = std::max<std::int64_t>(0, r - reach); q <= std::min(rows - 1, r + reach); ++q)
+            if (cleaned(q))
+                return true;
+        return false;
+    };
+    bool any = false;
+    for (std::int64_t r = 0; r < rows && !any; ++r)
+        any = cleaned(r);
+    if (!any)
+        return counts;
+    scratch.resize(static_cast<std::size_t>(rows), static_cast<std::size_t>(frames));
+    // [row][frame]: one short contiguous read per frame rather than F reads F pages apart for each row.
     for (int t = 0; t < frames; ++t) {
-        const double value = values[t];
-        scratch.row[static_cast<std::size_t>(t)] = value;
-        if (std::isfinite(value))
-            scratch.to_median[finite++] = value;
+        const float* frame_rows = &band.at(first, t);
+        for (std::int64_t r = 0; r < rows; ++r)
+            scratch.values[static_cast<std::size_t>(r * frames + t)] = frame_rows[r];
     }
-    bool changed = false;
-    if (finite < static_cast<std::size_t>(frames)) {
-        const double median = scratch.median(scratch.to_median, finite);
-        for (double& value : scratch.row)
-            if (!std::isfinite(value)) {
-                value = median;
-                ++counts.non_finite;
+    for (std::int64_t r = 0; r < rows; ++r) {
+        RowStats& stats = scratch.stats[static_cast<std::size_t>(r)];
+        stats = {};
+        if (!needed(r))
+            continue;
+        first_load(scratch, r, stats);
+        if (fireflies)
+            row_statistics(scratch, options, cleaned(r), stats);
+    }
+    for (std::int64_t r = 0; r < rows; ++r) {
+        if (!cleaned(r))
+            continue;
+        const RowStats& stats = scratch.stats[static_cast<std::size_t>(r)];
+        counts.non_finite += stats.non_finite;
+        bool changed = stats.non_finite > 0;
+        if (changed || stats.threshold != kNoClamp)
+            load(scratch, r, stats);
+        if (stats.threshold != kNoClamp) {
+            double excess = 0;
+            for (int t = 0; t < frames; ++t) {
+                double& value = scratch.row[static_cast<std::size_t>(t)];
+                if (!(value > stats.threshold))
+                    continue;
+                const double threshold =
+                    shape.channels > 0 ? lifted_threshold(stats, options, shared_excess(scratch, shape, r, t))
+                                       : stats.threshold;
+                if (value > threshold) {
+                    excess += value - threshold;
+                    value = threshold;
+                    ++counts.fireflies;
+                }
             }
-        changed = true;
+            if (excess > 0) {
+                const double share = excess / static_cast<double>(frames);
+                for (double& value : scratch.row)
+                    value += share;
+                changed = true;
+            }
+        }
+        if (changed_rows)
+            changed_rows[first + r] = changed ? 1 : 0;
+        if (changed)
+            for (int t = 0; t < frames; ++t)
+                band.at(first + r, t) = static_cast<float>(scratch.row[static_cast<std::size_t>(t)]);
     }
-    if (options.fireflies && frames >= 3 && clamp_fireflies(scratch, options, counts))
-        changed = true;
-    if (changed_out)
-        *changed_out = changed;
-    if (changed)
-        for (int t = 0; t < frames; ++t)
-            band.at(i, t) = static_cast<float>(scratch.row[static_cast<std::size_t>(t)]);
     return counts;
 }
 
-} // namespace
-
-OutlierCounts clean_outliers(MutableBandView band, const OutlierOptions& options, std::uint8_t* changed_rows)
+// Runs clean_group over the band's groups in parallel: image rows when `layout`
+// has a width, otherwise fixed runs of rows with no neighbours.
+OutlierCounts clean_groups(const MutableBandView& band, const OutlierOptions& options,
+                           const ImageRowLayout& layout, const std::uint8_t* only, std::uint8_t* changed_rows)
 {
     if (band.rows <= 0 || band.frames <= 0)
         return {};
-    const std::int64_t tiles = tile_count(band.rows);
-    std::vector<OutlierCounts> per_tile(static_cast<std::size_t>(tiles));
-    for_each_tile(band.rows, [&](std::int64_t row0, std::int64_t count) {
-        RowScratch scratch;
-        scratch.resize(static_cast<std::size_t>(band.frames));
-        OutlierCounts& tile_counts = per_tile[static_cast<std::size_t>(row0 / kTileRows)];
-        // The rows are gathered kGatherRows at a time into [row][frame], one short
-        // contiguous read per frame, rather than F reads F pages apart for each row.
-        constexpr std::int64_t kGatherRows = 64;
-        std::vector<float> gathered(static_cast<std::size_t>(kGatherRows * band.frames));
-        for (std::int64_t first = row0; first < row0 + count; first += kGatherRows) {
-            const std::int64_t rows = std::min(kGatherRows, row0 + count - first);
-            for (int t = 0; t < band.frames; ++t) {
-                const float* frame_rows = &band.at(first, t);
-                for (std::int64_t r = 0; r < rows; ++r)
-                    gathered[static_cast<std::size_t>(r * band.frames + t)] = frame_rows[r];
-            }
-            for (std::int64_t r = 0; r < rows; ++r) {
-                bool changed = false;
-                const OutlierCounts row_counts = clean_row(
-                    band, first + r, gathered.data() + r * band.frames, options, scratch, &changed);
-                tile_counts.non_finite += row_counts.non_finite;
-                tile_counts.fireflies += row_counts.fireflies;
-                if (changed_rows)
-                    changed_rows[first + r] = changed ? 1 : 0;
-            }
-        }
-    });
+    constexpr std::int64_t kLoneRows = 64;
+    const std::int64_t group_rows =
+        layout.width > 0 ? static_cast<std::int64_t>(layout.width) * layout.channels : kLoneRows;
+    if (layout.width > 0 && (layout.channels <= 0 || band.rows % group_rows != 0))
+        throw Error(ErrorKind::Internal, "clean_outliers: the band is not whole image rows of its layout");
+    const std::int64_t groups = (band.rows + group_rows - 1) / group_rows;
+    std::vector<OutlierCounts> per_group(static_cast<std::size_t>(groups));
+    tbb::enumerable_thread_specific<GroupScratch> scratches;
+    throw_if_cancelled();
+    tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, groups, 1),
+                      [&](const tbb::blocked_range<std::int64_t>& range) {
+                          GroupScratch& scratch = scratches.local();
+                          for (std::int64_t g = range.begin(); g != range.end(); ++g) {
+                              const std::int64_t first = g * group_rows;
+                              const GroupShape shape{std::min(group_rows, band.rows - first), band.frames,
+                                                     layout.width > 0 ? layout.channels : 0};
+                              per_group[static_cast<std::size_t>(g)] =
+                                  clean_group(band, first, shape, options, only, changed_rows, scratch);
+                          }
+                      });
     OutlierCounts total;
-    for (const OutlierCounts& counts : per_tile) {
+    for (const OutlierCounts& counts : per_group) {
         total.non_finite += counts.non_finite;
         total.fireflies += counts.fireflies;
     }
     return total;
 }
 
-void clean_marked_outliers(MutableBandView band, const OutlierOptions& options, const std::uint8_t* changed_rows)
+} // namespace
+
+OutlierCounts clean_outliers(MutableBandView band, const OutlierOptions& options, std::uint8_t* changed_rows,
+                             const ImageRowLayout& layout)
 {
-    if (band.rows <= 0 || band.frames <= 0)
-        return;
-    for_each_tile(band.rows, [&](std::int64_t row0, std::int64_t count) {
-        RowScratch scratch;
-        std::vector<float> values;  // the row's samples, contiguous
-        for (std::int64_t i = row0; i < row0 + count; ++i) {
-            if (!changed_rows[i])
-                continue;
-            if (scratch.row.empty()) {
-                scratch.resize(static_cast<std::size_t>(band.frames));
-                values.resize(static_cast<std::size_t>(band.frames));
-            }
-            for (int t = 0; t < band.frames; ++t)
-                values[static_cast<std::size_t>(t)] = band.at(i, t);
-            clean_row(band, i, values.data(), options, scratch);
-        }
-    });
+    return clean_groups(band, options, layout, nullptr, changed_rows);
+}
+
+void clean_marked_outliers(MutableBandView band, const OutlierOptions& options,
+                           const std::uint8_t* changed_rows, const ImageRowLayout& layout)
+{
+    clean_groups(band, options, layout, changed_rows, nullptr);
 }
 
 } // namespace modestack::lowrank

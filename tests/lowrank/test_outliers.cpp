@@ -2,7 +2,9 @@
 // clamped with the row's temporal sum preserved, clean data left bit-exact, and the
 // same result with 1 and 2 threads, re-cleaning only the marked rows of a fresh
 // read gives the same bits as cleaning it all, and the clamp's shortcuts give the
-// bits of the plain rule.
+// bits of the plain rule; light that row neighbours share in a frame is not
+// taken for fireflies.
+#include "core/common/error.h"
 #include "core/lowrank/outliers.h"
 #include "tests/lowrank/synthetic.h"
 
@@ -126,40 +128,46 @@ TEST_CASE("clean data is left bit-exact")
     CHECK(std::memcmp(matrix.data.data(), original.data.data(), sizeof(float) * matrix.data.size()) == 0);
 }
 
-TEST_CASE("outlier cleaning is bit-identical with 1 and 2 threads")
+TEST_CASE("outlier cleaning is bit-identical with 1 and 2 threads, with and without row neighbours")
 {
-    FrameMatrix input = positive_noisy(20000, 16, 31);
-    for (std::int64_t i = 0; i < input.rows; i += 97)
-        input.at(i, static_cast<int>(i % 16)) =
-            (i % 3 == 0) ? std::numeric_limits<float>::quiet_NaN() : 300.0f;
-    auto run = [&](int threads, FrameMatrix& matrix, OutlierCounts& counts) {
-        tbb::task_arena arena(threads);
-        arena.execute([&] { counts = clean_outliers(matrix.mutable_view()); });
-    };
-    FrameMatrix one = input, two = input;
-    OutlierCounts counts_one, counts_two;
-    run(1, one, counts_one);
-    run(2, two, counts_two);
-    CHECK(counts_one.non_finite == counts_two.non_finite);
-    CHECK(counts_one.fireflies == counts_two.fireflies);
-    CHECK(counts_one.non_finite + counts_one.fireflies == (input.rows + 96) / 97);
-    CHECK(std::memcmp(one.data.data(), two.data.data(), sizeof(float) * one.data.size()) == 0);
+    for (const ImageRowLayout layout : {ImageRowLayout{}, ImageRowLayout{50, 4}}) {
+        FrameMatrix input = positive_noisy(20000, 16, 31);
+        for (std::int64_t i = 0; i < input.rows; i += 97)
+            input.at(i, static_cast<int>(i % 16)) =
+                (i % 3 == 0) ? std::numeric_limits<float>::quiet_NaN() : 300.0f;
+        auto run = [&](int threads, FrameMatrix& matrix, OutlierCounts& counts) {
+            tbb::task_arena arena(threads);
+            arena.execute([&] { counts = clean_outliers(matrix.mutable_view(), {}, nullptr, layout); });
+        };
+        FrameMatrix one = input, two = input;
+        OutlierCounts counts_one, counts_two;
+        run(1, one, counts_one);
+        run(2, two, counts_two);
+        CHECK(counts_one.non_finite == counts_two.non_finite);
+        CHECK(counts_one.fireflies == counts_two.fireflies);
+        CHECK(counts_one.non_finite + counts_one.fireflies == (input.rows + 96) / 97);
+        CHECK(std::memcmp(one.data.data(), two.data.data(), sizeof(float) * one.data.size()) == 0);
+    }
 }
 
-TEST_CASE("re-cleaning only the marked rows of a fresh read gives the same bits")
+TEST_CASE(
+    "re-cleaning only the marked rows of a fresh read gives the same bits, with and without row neighbours")
 {
-    FrameMatrix input = positive_noisy(20000, 16, 41);
-    for (std::int64_t i = 0; i < input.rows; i += 89)
-        input.at(i, static_cast<int>(i % 16)) = (i % 2 == 0) ? std::numeric_limits<float>::infinity() : 500.0f;
-    FrameMatrix first = input, again = input;
-    std::vector<std::uint8_t> marks(static_cast<std::size_t>(input.rows), 7);
-    const OutlierCounts counts = clean_outliers(first.mutable_view(), {}, marks.data());
-    const auto marked = std::count(marks.begin(), marks.end(), std::uint8_t(1));
-    CHECK(std::count(marks.begin(), marks.end(), std::uint8_t(0)) + marked == input.rows);
-    CHECK(marked == (input.rows + 88) / 89);
-    CHECK(counts.non_finite + counts.fireflies >= marked);
-    clean_marked_outliers(again.mutable_view(), {}, marks.data());
-    CHECK(std::memcmp(first.data.data(), again.data.data(), sizeof(float) * first.data.size()) == 0);
+    for (const ImageRowLayout layout : {ImageRowLayout{}, ImageRowLayout{50, 4}}) {
+        FrameMatrix input = positive_noisy(20000, 16, 41);
+        for (std::int64_t i = 0; i < input.rows; i += 89)
+            input.at(i, static_cast<int>(i % 16)) =
+                (i % 2 == 0) ? std::numeric_limits<float>::infinity() : 500.0f;
+        FrameMatrix first = input, again = input;
+        std::vector<std::uint8_t> marks(static_cast<std::size_t>(input.rows), 7);
+        const OutlierCounts counts = clean_outliers(first.mutable_view(), {}, marks.data(), layout);
+        const auto marked = std::count(marks.begin(), marks.end(), std::uint8_t(1));
+        CHECK(std::count(marks.begin(), marks.end(), std::uint8_t(0)) + marked == input.rows);
+        CHECK(marked == (input.rows + 88) / 89);
+        CHECK(counts.non_finite + counts.fireflies >= marked);
+        clean_marked_outliers(again.mutable_view(), {}, marks.data(), layout);
+        CHECK(std::memcmp(first.data.data(), again.data.data(), sizeof(float) * first.data.size()) == 0);
+    }
 }
 
 namespace {
@@ -218,11 +226,11 @@ TEST_CASE("firefly clamping matches the plain rule bit for bit on heavy-tailed r
                 if (kind == 1)
                     value = 0.5 + uniform();
                 else if (kind == 2)
-                    value = 0.2 / std::pow(u, 0.8);  // Pareto-like: 4-spp fireflies
+                    value = 0.2 / std::pow(u, 0.8); // Pareto-like: 4-spp fireflies
                 else if (kind == 3)
                     value = uniform() - 0.5 + (u < 0.02 ? 40.0 : 0.0);
                 else if (kind == 4)
-                    value = (t % 3 == 0) ? 1.0 : 1.0 + 6 * 1.4826 * 0.1;  // the floor's threshold itself
+                    value = (t % 3 == 0) ? 1.0 : 1.0 + 6 * 1.4826 * 0.1; // the floor's threshold itself
                 matrix.at(i, t) = static_cast<float>(value);
             }
         }
@@ -242,4 +250,52 @@ TEST_CASE("firefly clamping matches the plain rule bit for bit on heavy-tailed r
         CHECK(counts.fireflies > rows / 50);
         CHECK(std::memcmp(matrix.data.data(), expected.data.data(), sizeof(float) * matrix.data.size()) == 0);
     }
+}
+
+TEST_CASE("light the row neighbours share in a frame is kept, and a lone firefly beside it or on it is clamped")
+{
+    // One image row of 60 RGB pixels over 24 frames; pixels 20–39 lit 20× brighter
+    // in frames 10–12 (a light passing), a firefly beside the light (pixel 5,
+    // spread onto pixel 6 as a pixel filter would) and one on it (pixel 30, in a
+    // lit frame).
+    constexpr int kWidth = 60, kChannels = 3, kFrames = 24;
+    FrameMatrix input = positive_noisy(kWidth * kChannels, kFrames, 51);
+    for (int x = 20; x < 40; ++x)
+        for (int c = 0; c < kChannels; ++c)
+            for (int t = 10; t <= 12; ++t)
+                input.at(x * kChannels + c, t) += 20.0f;
+    const std::int64_t beside = 5 * kChannels + 0, on = 30 * kChannels + 1;
+    const std::int64_t spread_onto = beside + kChannels; // as a pixel filter spreads it
+    input.at(beside, 3) = 500.0f;
+    input.at(spread_onto, 3) = 200.0f;
+    input.at(on, 11) = 500.0f;
+
+    FrameMatrix with_neighbours = input;
+    const OutlierCounts counts =
+        clean_outliers(with_neighbours.mutable_view(), {}, nullptr, ImageRowLayout{kWidth, kChannels});
+    CHECK(counts.fireflies == 3);
+    for (std::int64_t i = 0; i < input.rows; ++i) {
+        if (i == beside || i == spread_onto || i == on) {
+            CHECK(with_neighbours.at(i, i == on ? 11 : 3) < 100.0f);
+            CHECK(row_sum(with_neighbours, i) == doctest::Approx(row_sum(input, i)).epsilon(1e-6));
+            continue;
+        }
+        for (int t = 0; t < kFrames; ++t)
+            REQUIRE(with_neighbours.at(i, t) == input.at(i, t)); // the lit frames, their edges too
+    }
+
+    // Each row on its own cannot tell the light from fireflies: it flattens the
+    // light's three frames into all 24.
+    FrameMatrix alone = input;
+    const OutlierCounts alone_counts = clean_outliers(alone.mutable_view());
+    MESSAGE("clamped without row neighbours: " << alone_counts.fireflies);
+    CHECK(alone_counts.fireflies >= 20 * kChannels * 3);
+    CHECK(alone.at(25 * kChannels, 11) < 0.5f * input.at(25 * kChannels, 11));
+}
+
+TEST_CASE("a band that is not whole image rows of its layout is an internal error")
+{
+    FrameMatrix matrix = positive_noisy(100, 8, 61);
+    CHECK_THROWS_AS(clean_outliers(matrix.mutable_view(), {}, nullptr, ImageRowLayout{30, 3}),
+                    modestack::Error);
 }
