@@ -252,7 +252,7 @@ OutlierCounts clean_groups(const MutableBandView& band, const OutlierOptions& op
     constexpr std::int64_t kLoneRows = 64;
     const std::int64_t group_rows =
         layout.width > 0 ? static_cast<std::int64_t>(layout.width) * layout.channels : kLoneRows;
-    if (layout.width > 0 && (layout.channels <= 0 || band.rows % group_rows != 0))
+    if (layout.width < 0 || (layout.width > 0 && (layout.channels <= 0 || band.rows % group_rows != 0)))
         throw Error(ErrorKind::Internal, "clean_outliers: the band is not whole image rows of its layout");
     const std::int64_t groups = (band.rows + group_rows - 1) / group_rows;
     std::vector<OutlierCounts> per_group(static_cast<std::size_t>(groups));

@@ -22,7 +22,11 @@
 // samples, so a peak k times the pixel's typical value is k times as noisy.
 // The threshold is m + k·1.4826·max(spread·m/typical, floor·m), never below the
 // plain one. Only row neighbours (same image row, same channel) are read, so
-// the result does not depend on how the shot is cut into bands.
+// the result does not depend on how the shot is cut into bands. What it lets
+// through, knowingly: a firefly on light its neighbours share is judged at
+// that light's level, leniently where the pixel is nearly dark in most frames
+// (m/typical is large); and a firefly that a wide pixel filter spread over
+// three pixels or more lifts its own threshold.
 #pragma once
 
 #include "core/lowrank/band.h"

@@ -299,3 +299,155 @@ TEST_CASE("a band that is not whole image rows of its layout is an internal erro
     CHECK_THROWS_AS(clean_outliers(matrix.mutable_view(), {}, nullptr, ImageRowLayout{30, 3}),
                     modestack::Error);
 }
+
+namespace {
+
+// The rule with row neighbours written out plainly (outliers.h): every row's
+// NaN/Inf replaced first, its median and plain threshold by full sorts, then
+// each sample above the plain threshold judged against the lifted one.
+std::int64_t plain_clean_with_neighbours(FrameMatrix& matrix, int width, int channels,
+                                         const OutlierOptions& options)
+{
+    const int frames = matrix.frames;
+    std::vector<std::vector<double>> rows(static_cast<std::size_t>(matrix.rows));
+    std::vector<double> medians(rows.size());
+    for (std::int64_t i = 0; i < matrix.rows; ++i) {
+        std::vector<double> finite;
+        for (int t = 0; t < frames; ++t)
+            if (std::isfinite(matrix.at(i, t)))
+                finite.push_back(matrix.at(i, t));
+        const double fill = finite.empty() ? 0.0 : plain_median(finite);
+        for (int t = 0; t < frames; ++t)
+            rows[static_cast<std::size_t>(i)].push_back(std::isfinite(matrix.at(i, t)) ? matrix.at(i, t) : fill);
+        medians[static_cast<std::size_t>(i)] = plain_median(rows[static_cast<std::size_t>(i)]);
+    }
+    const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
+    std::int64_t clamped = 0;
+    for (std::int64_t i = 0; i < matrix.rows; ++i) {
+        std::vector<double> row = rows[static_cast<std::size_t>(i)];
+        const double median = medians[static_cast<std::size_t>(i)];
+        std::vector<double> deviations, magnitudes;
+        for (double value : row) {
+            deviations.push_back(std::abs(value - median));
+            magnitudes.push_back(std::abs(value));
+        }
+        const double typical = *std::min_element(row.begin(), row.end()) >= 0 ? median : plain_median(magnitudes);
+        const double spread = std::max({plain_median(deviations), options.mad_floor_fraction * typical, 1e-30});
+        const double plain = median + options.firefly_k * 1.4826 * spread;
+        const std::int64_t x = (i % row_samples) / channels;
+        const auto excess = [&](int dx, int t) {
+            if (x + dx < 0 || x + dx >= width)
+                return -std::numeric_limits<double>::infinity();
+            const std::size_t q = static_cast<std::size_t>(i + dx * channels);
+            return rows[q][static_cast<std::size_t>(t)] - medians[q];
+        };
+        double removed = 0;
+        for (int t = 0; t < frames; ++t) {
+            double& value = row[static_cast<std::size_t>(t)];
+            if (!(value > plain))
+                continue;
+            const double shared = std::max(
+                {std::min(excess(-1, t), excess(-2, t)), std::min(excess(1, t), excess(2, t)), 0.0});
+            double threshold = plain;
+            if (shared > 0) {
+                const double expected = median + shared;
+                const double level = typical > 0 && expected > typical ? expected / typical : 1.0;
+                threshold = expected + options.firefly_k * 1.4826 *
+                                           std::max(spread * level, options.mad_floor_fraction * std::abs(expected));
+            }
+            CHECK(threshold >= plain);
+            if (value > threshold)
+                removed += value - threshold, value = threshold, ++clamped;
+        }
+        if (removed > 0)
+            for (double& value : row)
+                value += removed / static_cast<double>(frames);
+        for (int t = 0; t < frames; ++t)
+            matrix.at(i, t) = static_cast<float>(row[static_cast<std::size_t>(t)]);
+    }
+    return clamped;
+}
+
+// An image of `height` rows of `width` RGB pixels over `frames` frames with the
+// kinds of light the rule must tell apart: heavy-tailed noise, signed values,
+// pixels dark in most frames, noisy rows whose MAD is above the floor, patches
+// of light that neighbours share in a few frames, fireflies, and NaN/Inf
+// beside fireflies.
+FrameMatrix mixed_image(int width, int height, int frames, std::uint64_t seed)
+{
+    constexpr int kChannels = 3;
+    FrameMatrix matrix(static_cast<std::int64_t>(width) * height * kChannels, frames);
+    std::uint64_t state = seed;
+    auto uniform = [&] {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<double>(state >> 11) * 0x1.0p-53;
+    };
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x) {
+            const int kind = (x / 4 + y) % 5;
+            for (int c = 0; c < kChannels; ++c)
+                for (int t = 0; t < frames; ++t) {
+                    const double u = std::max(uniform(), 1e-12);
+                    double value = 0.2 / std::pow(u, 0.8); // heavy-tailed
+                    if (kind == 1)
+                        value = uniform() - 0.5 + (u < 0.02 ? 40.0 : 0.0); // signed
+                    else if (kind == 2)
+                        value = (t * 7 + x) % 10 < 6 ? 0.0 : 1.0 + 0.5 * uniform(); // dark in most frames
+                    else if (kind == 3)
+                        value = 1.0 + 2.0 * uniform(); // MAD above the floor
+                    if ((x / 6 + t) % 9 == 0 && y % 3 != 0)
+                        value += 15.0 + uniform(); // light its neighbours share
+                    const std::int64_t i = (static_cast<std::int64_t>(y) * width + x) * kChannels + c;
+                    matrix.at(i, t) = static_cast<float>(value);
+                }
+        }
+    for (std::int64_t i = 5; i < matrix.rows; i += 37) {
+        const int t = static_cast<int>(i % frames);
+        matrix.at(i, t) = 900.0f;
+        if (i + kChannels < matrix.rows)
+            matrix.at(i + kChannels, t) = (i % 2 == 0) ? std::numeric_limits<float>::quiet_NaN()
+                                                        : std::numeric_limits<float>::infinity();
+    }
+    return matrix;
+}
+
+} // namespace
+
+TEST_CASE("row neighbours: the rule written out plainly gives the same bits")
+{
+    for (int frames : {7, 24}) {
+        const int width = 40, height = 12;
+        FrameMatrix matrix = mixed_image(width, height, frames, 99u + static_cast<std::uint64_t>(frames));
+        FrameMatrix expected = matrix;
+        const std::int64_t expected_fireflies = plain_clean_with_neighbours(expected, width, 3, {});
+        const OutlierCounts counts = clean_outliers(matrix.mutable_view(), {}, nullptr, ImageRowLayout{width, 3});
+        MESSAGE(frames << " frames: " << counts.fireflies << " fireflies, " << counts.non_finite << " NaN/Inf");
+        CHECK(counts.fireflies == expected_fireflies);
+        CHECK(counts.fireflies > 0);
+        CHECK(counts.non_finite > 0);
+        CHECK(std::memcmp(matrix.data.data(), expected.data.data(), sizeof(float) * matrix.data.size()) == 0);
+    }
+}
+
+TEST_CASE("row neighbours: bands of whole image rows, cut anywhere, give the bits of the whole image")
+{
+    const int width = 40, height = 12, frames = 24;
+    const std::int64_t row_samples = width * 3;
+    const FrameMatrix input = mixed_image(width, height, frames, 7);
+    FrameMatrix whole = input;
+    clean_outliers(whole.mutable_view(), {}, nullptr, ImageRowLayout{width, 3});
+    for (int band_height : {1, 5, 7}) {
+        FrameMatrix banded = input, marked_again = input;
+        for (int y = 0; y < height; y += band_height) {
+            const std::int64_t first = y * row_samples;
+            const std::int64_t rows = std::min(band_height, height - y) * row_samples;
+            const MutableBandView band{&banded.at(first, 0), rows, frames, banded.rows};
+            std::vector<std::uint8_t> marks(static_cast<std::size_t>(rows));
+            clean_outliers(band, {}, marks.data(), ImageRowLayout{width, 3});
+            const MutableBandView again{&marked_again.at(first, 0), rows, frames, marked_again.rows};
+            clean_marked_outliers(again, {}, marks.data(), ImageRowLayout{width, 3});
+        }
+        CHECK(std::memcmp(banded.data.data(), whole.data.data(), sizeof(float) * whole.data.size()) == 0);
+        CHECK(std::memcmp(marked_again.data.data(), whole.data.data(), sizeof(float) * whole.data.size()) == 0);
+    }
+}
