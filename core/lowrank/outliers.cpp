@@ -17,6 +17,8 @@ namespace modestack::lowrank {
 namespace {
 
 constexpr double kNoClamp = std::numeric_limits<double>::infinity();
+// The shared excess reads this many pixels on each side of a sample.
+constexpr std::int64_t kNeighbourPixels = 2;
 
 // What the first look at one row found.
 struct RowStats {
@@ -31,6 +33,10 @@ struct RowStats {
 // Scratch for one group of rows.
 struct GroupScratch {
     std::vector<float> values; // the group's samples as read, [row][frame]
+    // The previous piece of the same image row: its samples as read, from band
+    // row previous_first (it may have cleaned some of them in the band since).
+    std::vector<float> previous;
+    std::int64_t previous_first = 0, previous_rows = 0;
     std::vector<RowStats> stats;
     std::vector<double> row;
     std::vector<double> to_median; // the finite samples, |samples| or deviations a median is taken of
@@ -124,11 +130,15 @@ void row_statistics(GroupScratch& scratch, const OutlierOptions& options, bool c
     stats.threshold = threshold_of(mad);
 }
 
-// Geometry of one group: rows of `channels` interleaved channels, or no neighbours.
+// Geometry of one group: consecutive rows, read whole, of which rows
+// [own_begin, own_end) are cleaned; with `channels`, they are pixels of one
+// image row (`channels` interleaved channels) and the rows beyond the own ones
+// are the row neighbours the own ones need, as far as the image row goes.
 struct GroupShape {
     std::int64_t rows = 0;
     int frames = 0;
     int channels = 0; // 0: the rows are not pixels of an image row
+    std::int64_t own_begin = 0, own_end = 0;
 };
 
 // How far sample (r, t) of the group stands above its median where its row
@@ -171,9 +181,11 @@ OutlierCounts clean_group(const MutableBandView& band, std::int64_t first, const
     OutlierCounts counts;
     const std::int64_t rows = shape.rows;
     const int frames = shape.frames;
-    const auto cleaned = [&](std::int64_t r) { return only == nullptr || only[first + r] != 0; };
+    const auto cleaned = [&](std::int64_t r) {
+        return r >= shape.own_begin && r < shape.own_end && (only == nullptr || only[first + r] != 0);
+    };
     const bool fireflies = options.fireflies && frames >= 3;
-    const std::int64_t reach = fireflies ? 2 * static_cast<std::int64_t>(shape.channels) : 0;
+    const std::int64_t reach = fireflies ? kNeighbourPixels * shape.channels : 0;
     // Rows whose statistics are needed: those cleaned and, for the shared
     // excess, their row neighbours.
     const auto needed = [&](std::int64_t r) {
@@ -183,16 +195,25 @@ OutlierCounts clean_group(const MutableBandView& band, std::int64_t first, const
         return false;
     };
     bool any = false;
-    for (std::int64_t r = 0; r < rows && !any; ++r)
+    for (std::int64_t r = shape.own_begin; r < shape.own_end && !any; ++r)
         any = cleaned(r);
-    if (!any)
+    if (!any) {
+        scratch.previous_rows = 0; // nothing cleaned here: the next piece reads the band as it is
         return counts;
+    }
     scratch.resize(static_cast<std::size_t>(rows), static_cast<std::size_t>(frames));
     // [row][frame]: one short contiguous read per frame rather than F reads F pages apart for each row.
     for (int t = 0; t < frames; ++t) {
         const float* frame_rows = &band.at(first, t);
         for (std::int64_t r = 0; r < rows; ++r)
             scratch.values[static_cast<std::size_t>(r * frames + t)] = frame_rows[r];
+    }
+    // Neighbours the previous piece owned are read as they were, not as it cleaned them.
+    for (std::int64_t r = 0; r < shape.own_begin; ++r) {
+        const std::int64_t before = first + r - scratch.previous_first;
+        if (before >= 0 && before < scratch.previous_rows)
+            std::copy_n(&scratch.previous[static_cast<std::size_t>(before * frames)], frames,
+                        &scratch.values[static_cast<std::size_t>(r * frames)]);
     }
     for (std::int64_t r = 0; r < rows; ++r) {
         RowStats& stats = scratch.stats[static_cast<std::size_t>(r)];
@@ -203,7 +224,7 @@ OutlierCounts clean_group(const MutableBandView& band, std::int64_t first, const
         if (fireflies)
             row_statistics(scratch, options, cleaned(r), stats);
     }
-    for (std::int64_t r = 0; r < rows; ++r) {
+    for (std::int64_t r = shape.own_begin; r < shape.own_end; ++r) {
         if (!cleaned(r))
             continue;
         const RowStats& stats = scratch.stats[static_cast<std::size_t>(r)];
@@ -239,34 +260,65 @@ OutlierCounts clean_group(const MutableBandView& band, std::int64_t first, const
             for (int t = 0; t < frames; ++t)
                 band.at(first + r, t) = static_cast<float>(scratch.row[static_cast<std::size_t>(t)]);
     }
+    std::swap(scratch.previous, scratch.values);
+    scratch.previous_first = first;
+    scratch.previous_rows = rows;
     return counts;
 }
 
-// Runs clean_group over the band's groups in parallel: image rows when `layout`
-// has a width, otherwise fixed runs of rows with no neighbours.
+// Runs clean_group over the band's groups in parallel: pieces of image rows
+// (with their row neighbours) when `layout` has a width, otherwise fixed runs
+// of rows with no neighbours. A piece, not a whole image row, so that the
+// scratch stays small on long shots (an image row of 1080p over 1000 frames is
+// 23 MB); the neighbours it reads twice cost a few % more medians.
 OutlierCounts clean_groups(const MutableBandView& band, const OutlierOptions& options,
                            const ImageRowLayout& layout, const std::uint8_t* only, std::uint8_t* changed_rows)
 {
     if (band.rows <= 0 || band.frames <= 0)
         return {};
-    constexpr std::int64_t kLoneRows = 64;
-    const std::int64_t group_rows =
-        layout.width > 0 ? static_cast<std::int64_t>(layout.width) * layout.channels : kLoneRows;
-    if (layout.width < 0 || (layout.width > 0 && (layout.channels <= 0 || band.rows % group_rows != 0)))
+    constexpr std::int64_t kLoneRows = 64, kPiecePixels = 128;
+    const bool pixels = layout.width > 0;
+    const std::int64_t row_samples = pixels ? static_cast<std::int64_t>(layout.width) * layout.channels : 0;
+    if (layout.width < 0 || (pixels && (layout.channels <= 0 || band.rows % row_samples != 0)))
         throw Error(ErrorKind::Internal, "clean_outliers: the band is not whole image rows of its layout");
-    const std::int64_t groups = (band.rows + group_rows - 1) / group_rows;
+    const std::int64_t pieces_per_row = pixels ? (layout.width + kPiecePixels - 1) / kPiecePixels : 1;
+    const std::int64_t groups =
+        pixels ? band.rows / row_samples * pieces_per_row : (band.rows + kLoneRows - 1) / kLoneRows;
+    const auto shape_of = [&](std::int64_t g, std::int64_t& first) {
+        GroupShape shape;
+        shape.frames = band.frames;
+        if (!pixels) {
+            first = g * kLoneRows;
+            shape.rows = shape.own_end = std::min(kLoneRows, band.rows - first);
+            return shape;
+        }
+        const std::int64_t image_row = g / pieces_per_row, x0 = g % pieces_per_row * kPiecePixels;
+        const std::int64_t x1 = std::min<std::int64_t>(layout.width, x0 + kPiecePixels);
+        const std::int64_t read0 = std::max<std::int64_t>(0, x0 - kNeighbourPixels),
+                           read1 = std::min<std::int64_t>(layout.width, x1 + kNeighbourPixels);
+        first = image_row * row_samples + read0 * layout.channels;
+        shape.channels = layout.channels;
+        shape.rows = (read1 - read0) * layout.channels;
+        shape.own_begin = (x0 - read0) * layout.channels;
+        shape.own_end = (x1 - read0) * layout.channels;
+        return shape;
+    };
     std::vector<OutlierCounts> per_group(static_cast<std::size_t>(groups));
     tbb::enumerable_thread_specific<GroupScratch> scratches;
     throw_if_cancelled();
-    tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, groups, 1),
+    // One task cleans an image row's pieces in order, each reading the one
+    // before as it was read; image rows (or runs of lone rows) run in parallel.
+    tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, groups / pieces_per_row, 1),
                       [&](const tbb::blocked_range<std::int64_t>& range) {
                           GroupScratch& scratch = scratches.local();
-                          for (std::int64_t g = range.begin(); g != range.end(); ++g) {
-                              const std::int64_t first = g * group_rows;
-                              const GroupShape shape{std::min(group_rows, band.rows - first), band.frames,
-                                                     layout.width > 0 ? layout.channels : 0};
-                              per_group[static_cast<std::size_t>(g)] =
-                                  clean_group(band, first, shape, options, only, changed_rows, scratch);
+                          for (std::int64_t task = range.begin(); task != range.end(); ++task) {
+                              scratch.previous_rows = 0;
+                              for (std::int64_t g = task * pieces_per_row; g < (task + 1) * pieces_per_row; ++g) {
+                                  std::int64_t first = 0;
+                                  const GroupShape shape = shape_of(g, first);
+                                  per_group[static_cast<std::size_t>(g)] =
+                                      clean_group(band, first, shape, options, only, changed_rows, scratch);
+                              }
                           }
                       });
     OutlierCounts total;

@@ -12,6 +12,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -415,8 +416,8 @@ FrameMatrix mixed_image(int width, int height, int frames, std::uint64_t seed)
 
 TEST_CASE("row neighbours: the rule written out plainly gives the same bits")
 {
-    for (int frames : {7, 24}) {
-        const int width = 40, height = 12;
+    // 300 pixels: image rows are cleaned in pieces of 128 pixels, each with its neighbours.
+    for (const auto [frames, width, height] : {std::array{7, 40, 12}, std::array{24, 300, 4}}) {
         FrameMatrix matrix = mixed_image(width, height, frames, 99u + static_cast<std::uint64_t>(frames));
         FrameMatrix expected = matrix;
         const std::int64_t expected_fireflies = plain_clean_with_neighbours(expected, width, 3, {});
@@ -431,7 +432,7 @@ TEST_CASE("row neighbours: the rule written out plainly gives the same bits")
 
 TEST_CASE("row neighbours: bands of whole image rows, cut anywhere, give the bits of the whole image")
 {
-    const int width = 40, height = 12, frames = 24;
+    const int width = 300, height = 12, frames = 24;
     const std::int64_t row_samples = width * 3;
     const FrameMatrix input = mixed_image(width, height, frames, 7);
     FrameMatrix whole = input;
