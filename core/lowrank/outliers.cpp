@@ -56,34 +56,34 @@ struct GroupScratch {
     const float* samples(std::int64_t r) const { return &values[static_cast<std::size_t>(r) * row.size()]; }
 };
 
-// Copies row r's samples into scratch.row, each non-finite one replaced by the
-// median of the finite ones (0 if none); counts them and keeps that median in `stats`.
+// Sample t of row r as the cleaning sees it: a non-finite one is the row's fill.
+double sample_or_fill(const GroupScratch& scratch, std::int64_t r, std::size_t t, const RowStats& stats)
+{
+    const float value = scratch.samples(r)[t];
+    return std::isfinite(value) ? value : stats.fill;
+}
+
+// Loads row r into scratch.row as the cleaning sees it.
+void load(GroupScratch& scratch, std::int64_t r, const RowStats& stats)
+{
+    for (std::size_t t = 0; t < scratch.row.size(); ++t)
+        scratch.row[t] = sample_or_fill(scratch, r, t, stats);
+}
+
+// Counts row r's non-finite samples and finds its fill, the median of the
+// finite ones (0 if none), into `stats`; then loads the row.
 void first_load(GroupScratch& scratch, std::int64_t r, RowStats& stats)
 {
     const float* values = scratch.samples(r);
     const std::size_t frames = scratch.row.size();
     std::size_t finite = 0;
-    for (std::size_t t = 0; t < frames; ++t) {
-        const double value = values[t];
-        scratch.row[t] = value;
-        if (std::isfinite(value))
-            scratch.to_median[finite++] = value;
-    }
+    for (std::size_t t = 0; t < frames; ++t)
+        if (std::isfinite(values[t]))
+            scratch.to_median[finite++] = values[t];
     stats.non_finite = static_cast<std::int64_t>(frames - finite);
-    if (stats.non_finite == 0)
-        return;
-    stats.fill = scratch.median(scratch.to_median, finite);
-    for (double& value : scratch.row)
-        if (!std::isfinite(value))
-            value = stats.fill;
-}
-
-// Loads row r again as first_load left it.
-void load(GroupScratch& scratch, std::int64_t r, const RowStats& stats)
-{
-    const float* values = scratch.samples(r);
-    for (std::size_t t = 0; t < scratch.row.size(); ++t)
-        scratch.row[t] = std::isfinite(values[t]) ? values[t] : stats.fill;
+    if (stats.non_finite > 0)
+        stats.fill = scratch.median(scratch.to_median, finite);
+    load(scratch, r, stats);
 }
 
 // The median of scratch.row (NaN/Inf replaced) and, when a firefly check is
@@ -149,10 +149,7 @@ double shared_excess(const GroupScratch& scratch, const GroupShape& shape, std::
         if (q < 0 || q >= shape.rows)
             return -kNoClamp;
         const RowStats& stats = scratch.stats[static_cast<std::size_t>(q)];
-        double value = scratch.values[static_cast<std::size_t>(q * shape.frames + t)];
-        if (!std::isfinite(value))
-            value = stats.fill;
-        return value - stats.median;
+        return sample_or_fill(scratch, q, static_cast<std::size_t>(t), stats) - stats.median;
     };
     const std::int64_t c = shape.channels;
     const double left = std::min(excess(r - c), excess(r - 2 * c));
