@@ -253,4 +253,5 @@ def main():
     print(f'orbit_cross_room: {len(times)} frames, {total:.1f} s')
 
 
-main()
+if __name__ == '__main__':  # pan_room.py imports the room and the render settings
+    main()

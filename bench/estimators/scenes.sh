@@ -6,13 +6,17 @@
 #
 #   bench/estimators/scenes.sh MODESTACK [WORK]
 # Environment: SIZE (128x96), FRAMES (1-48), SPP (4), REF_SPP (256 per seed; two
-# seeds), SCENES (static orbit switch spin sweep cross), FIXED_SCENES (orbit:
+# seeds), SCENES (static orbit switch spin sweep cross flythrough: the last one's
+# camera moves), FIXED_SCENES (orbit:
 # rendered again with --fixed-seed, noise that repeats, scored against the
 # same references; each must be in SCENES), CYCLES_DIR
 # (../shared/cycles; skipped when absent), ORBIT_CROSS_DIR (the OUTDIR of
 # bench/cycles/render.sh: a Cycles shot with an orbiting light, a crossing sphere
 # and a light switched on; WORK/orbit_cross_room/render; skipped unless its three
-# variants are complete; its noisy_fixed too when rendered), CHOICES (the --estimators lists scored beside the
+# variants are complete; its noisy_fixed too when rendered), PAN_DIR (the OUTDIR
+# of SHOT=pan_room bench/cycles/render.sh: a camera pan over a glossy floor and
+# a metal sphere, GlossInd scored too; WORK/pan_room/render; skipped unless
+# complete), CHOICES (the --estimators lists scored beside the
 # default; "rebuild,input,spatial").
 # Renders are kept in WORK and reused. ~35 min of CPU for the references at
 # 128x96 on the 2-core machine of 2026-12-04.
@@ -25,10 +29,11 @@ size=${SIZE:-128x96}
 frames=${FRAMES:-1-48}
 spp=${SPP:-4}
 ref_spp=${REF_SPP:-256}
-scenes=${SCENES:-static orbit switch spin sweep cross}
+scenes=${SCENES:-static orbit switch spin sweep cross flythrough}
 fixed_scenes=${FIXED_SCENES:-orbit}
 cycles=${CYCLES_DIR:-$here/../../../shared/cycles}
 orbit_cross=${ORBIT_CROSS_DIR:-$work/orbit_cross_room/render}
+pan=${PAN_DIR:-$work/pan_room/render}
 choices=${CHOICES:-rebuild,input,spatial}
 mkdir -p "$work"
 
@@ -81,10 +86,17 @@ if [ -f "$orbit_cross/noisy/done" ] && [ -f "$orbit_cross/ref_a/done" ] && [ -f 
 else
     echo "SKIPPED: $orbit_cross has no complete noisy, ref_a, ref_b (render them with bench/cycles/render.sh)"
 fi
+if [ -f "$pan/noisy/done" ] && [ -f "$pan/ref_a/done" ] && [ -f "$pan/ref_b/done" ]; then
+    shots+=("pan_room|$pan/noisy/frame.####.exr|$pan/ref_a/frame.*.exr|$pan/ref_b/frame.*.exr|ViewLayer.")
+else
+    echo "SKIPPED: $pan has no complete noisy, ref_a, ref_b (render them with SHOT=pan_room bench/cycles/render.sh)"
+fi
 
 for entry in "${shots[@]}"; do
     IFS='|' read -r name input ref_a ref_b prefix <<< "$entry"
-    for layer in DiffDir DiffInd; do
+    layers=(DiffDir DiffInd)
+    [ "$name" = pan_room ] && layers+=(GlossInd) # the glossy floor's reflections move with the camera
+    for layer in "${layers[@]}"; do
         outputs=()
         denoise "$input" "$work/$name/default-$layer" "$prefix$layer"
         outputs+=("$work/$name/default-$layer/f.*.exr")
