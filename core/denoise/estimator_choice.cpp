@@ -667,7 +667,8 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                         rejected = true, chosen = static_cast<int>(Estimator::Input);
                 }
             }
-            // Sigma: the chosen one's variance part, plus its pooled SURE's excess where significant.
+            // Sigma: the chosen one's variance part, plus its pooled SURE's excess
+            // (the bias the variance part does not see).
             double floor_sum = 0;
             for (int c = 0; c < channels; ++c) {
                 const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
@@ -680,12 +681,21 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             }
             const double floor_mean = floor_sum * per_channel;
             const double risk = pooled_sure[x] - (chosen == 0 ? 0.0 : gain_mean[chosen][x]);
-            const double excess =
-                significant(risk - floor_mean, risk, square_mean[chosen][x]) ? risk - floor_mean : 0;
+            const bool biased = significant(risk - floor_mean, risk, square_mean[chosen][x]);
+            // In sigma, the rebuild's excess counts where significant: its risk is
+            // about a hundredth of the noise and the pooled SURE's own noise a tenth,
+            // so a positive part would be that noise (on indirect light it made
+            // sigma 4–10× too wide). A blur's bias is of the order of that noise,
+            // and cut at z standard errors it left the blurs' sigma short (DiffDir:
+            // 5 % of the blurs' values beyond 3σ, median |err|/σ 1.2 on the
+            // Cycles sweep_room); its positive part, an estimate of bias² on the
+            // safe side, counts whole (bench/results/estimators.md, section 16).
+            const bool blur = chosen >= static_cast<int>(Estimator::Gauss1);
+            const double excess = blur ? std::max(risk - floor_mean, 0.0) : biased ? risk - floor_mean : 0;
             // The non-local means may displace the candidate taken only where that
             // candidate's own risk shows a bias its variance part does not explain
             // (a blur across an edge), or where no linear candidate could be taken.
-            if (options.non_local && rejected && (chosen == 0 || excess > 0))
+            if (options.non_local && rejected && (chosen == 0 || biased))
                 work.biased[static_cast<size_t>(y - row) * width + x] = 1;
             const float* source = chosen == 0   ? rebuilt_at(y)
                                   : chosen == 1 ? input_at(y)

@@ -68,8 +68,10 @@
 // candidates too made the indirect light 2–28 % worse. It is computed only
 // around those pixels.
 // Sigma of the chosen estimator is its known variance part (the rebuild: the
-// engine's sigma²; a Gaussian: v·Σw²; the input: v), raised to its pooled SURE
-// where that is larger by z standard errors (the bias the variance part misses).
+// engine's sigma²; a Gaussian: v·Σw²; the input: v) plus the bias the variance
+// part misses: the rebuild's pooled SURE excess where it is z standard errors
+// above it, a blur's whenever positive (a blur's bias is of the order of the
+// pooled SURE's noise, and the gate left the blurs' sigma short).
 #pragma once
 
 #include "core/lowrank/confidence.h"
