@@ -1,11 +1,19 @@
 #include "core/denoise/band_rebuild.h"
 
+#include "core/common/error.h"
+#include "core/lowrank/bias_prior.h"
 #include "core/lowrank/projection.h"
 #include "core/lowrank/shrinkage.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace modestack::denoise {
+
+namespace {
+// The median of χ² with one degree of freedom.
+constexpr double kChiSquareOneMedian = 0.45493642311957283;
+} // namespace
 
 RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& basis, int kept_modes,
                                 int surveyed, const TrainingGram* training, double noise_sigma)
@@ -91,8 +99,10 @@ void BandRebuilder::prepare(const Band& data, int row, int end, const lowrank::M
         {m_coefficients.data() + residual_first, rebuilt_stride, m_modes.kept_modes, data.rows},
         m_modes.temporal_rank, {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride});
     // The filter reads the noisy band, which the means may overwrite: it goes first.
-    if (m_settings.mode_filter.enabled)
+    if (m_settings.mode_filter.enabled) {
+        m_first_unfiltered.assign(m_coefficients.begin() + offset, m_coefficients.begin() + offset + valid);
         filter(data, row, end, ranks);
+    }
     lowrank::ImageBandShape shape{m_shape.width, residual_end - residual_begin, m_shape.channels};
     m_noise_variance.resize(static_cast<size_t>(valid));
     lowrank::residual_noise_variance(
@@ -103,6 +113,15 @@ void BandRebuilder::prepare(const Band& data, int row, int end, const lowrank::M
     for (size_t j = 0; j < m_modes.shrinkage.size(); ++j) // --shrink optimal, the band's own rows
         for (std::int64_t i = 0; i < valid; ++i)
             m_coefficients[j * data.rows + offset + i] *= static_cast<float>(m_modes.shrinkage[j]);
+    // From the coefficients as the output is rebuilt from them (filtered, shrunk), as a farm's write task
+    // does.
+    m_first_mode_bias.clear();
+    if (m_settings.mode_filter.enabled && m_modes.rebuild_modes > 0) {
+        m_first_mode_bias.resize(static_cast<size_t>(valid));
+        first_mode_filter_bias(m_coefficients.data() + offset, m_first_unfiltered.data(),
+                               m_noise_variance.data(), m_gains.data(), valid, m_shape.width,
+                               m_shape.channels, m_first_mode_bias.data());
+    }
 }
 
 // The mode filter's part of pass 2 for rows [row, end) of `data`: filters the
@@ -154,6 +173,68 @@ void BandRebuilder::kept_noise_of_frame(const Eigen::MatrixXd& temporal, int t, 
             sum += temporal(t, j) * temporal(t, j) * gains[static_cast<size_t>(j * pixels + pixel)];
         std::fill_n(kept + pixel * m_shape.channels, m_shape.channels, static_cast<float>(sum));
     }
+}
+
+void first_mode_filter_bias(const float* filtered, const float* unfiltered, const float* noise_variance,
+                            const float* gains, std::int64_t samples, int width, int channels, float* bias)
+{
+    const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
+    if (row_samples <= 0 || samples % row_samples != 0)
+        throw Error(ErrorKind::Internal, "first_mode_filter_bias: samples are not whole image rows");
+    std::vector<double> difference(static_cast<size_t>(row_samples)), noise(difference.size());
+    lowrank::BiasRatioCounts counts{};
+    auto count = [&] {
+        counts.fill(0);
+        for (size_t k = 0; k < difference.size(); ++k)
+            ++counts[static_cast<size_t>(lowrank::bias_bin(difference[k] * difference[k] / noise[k]))];
+    };
+    for (std::int64_t begin = 0; begin < samples; begin += row_samples) {
+        for (std::int64_t k = 0; k < row_samples; ++k) {
+            const std::int64_t i = begin + k;
+            // A value outside its two row neighbours' range is cut to it: the
+            // first mode still holds some fireflies (an average over F frames
+            // of cleaned samples), which the filter rightly removes and which
+            // would read as its bias; an edge lies between its neighbours.
+            double value = unfiltered[i];
+            if (k >= channels && k + channels < row_samples) {
+                const double left = unfiltered[i - channels], right = unfiltered[i + channels];
+                value = std::clamp(value, std::min(left, right), std::max(left, right));
+            }
+            difference[static_cast<size_t>(k)] = static_cast<double>(filtered[i]) - value;
+            // Its noise: s²·(1 − 2·a_pp + Σa²), with the gain Σa² standing in
+            // for the centre weight a_pp as in the choice's SURE.
+            noise[static_cast<size_t>(k)] =
+                std::max(static_cast<double>(noise_variance[i]) * (1.0 - gains[i / channels]), 0.0);
+        }
+        count();
+        // The empirical null (Efron): most of a row is unbiased, so the median of
+        // t² is the noise's, 0.4549 under a Gaussian. Where it is wider (s² is a
+        // high-pass estimate, and a renderer's pixel filter correlates
+        // neighbours) the noise is scaled up to it, never down.
+        const double null_scale = lowrank::bias_ratio_median(counts) / kChiSquareOneMedian;
+        if (null_scale > 1) {
+            for (double& value : noise)
+                value *= null_scale;
+            count();
+        }
+        // The bias b² as the posterior mean under the row's prior, as for
+        // sigma's bias term: about 0 where noise explains the difference, about
+        // its square where it cannot.
+        const lowrank::BiasPosterior posterior = lowrank::fit_bias_posterior(counts);
+        for (std::int64_t k = 0; k < row_samples; ++k) {
+            const double d = difference[static_cast<size_t>(k)], null = noise[static_cast<size_t>(k)];
+            const auto bin = static_cast<size_t>(lowrank::bias_bin(d * d / null));
+            bias[begin + k] = static_cast<float>(posterior.slope[bin] * d * d + posterior.offset[bin] * null);
+        }
+    }
+}
+
+void add_first_mode_bias(double weight, const float* bias, std::int64_t samples, float* sigma)
+{
+    const double weight_squared = weight * weight;
+    for (std::int64_t i = 0; i < samples; ++i)
+        sigma[i] = static_cast<float>(
+            std::sqrt(static_cast<double>(sigma[i]) * sigma[i] + weight_squared * bias[i]));
 }
 
 } // namespace modestack::denoise

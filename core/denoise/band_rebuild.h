@@ -83,6 +83,9 @@ public:
     const std::vector<float>& noise_variance() const { return m_noise_variance; }
     /// The mode filter's kept-noise gain per valid pixel and mode of the last band.
     const std::vector<float>& gains() const { return m_gains; }
+    /// The first mode's filter bias per valid sample of the last band
+    /// (first_mode_filter_bias; empty without the mode filter).
+    const std::vector<float>& first_mode_bias() const { return m_first_mode_bias; }
 
 private:
     void filter(const Band& data, int row, int end, std::vector<float>* ranks);
@@ -95,11 +98,31 @@ private:
     int m_surveyed;
     const FeatureGuide* m_features;
     lowrank::ConfidenceOptions m_confidence;
-    std::vector<float> m_filtered;       // the filter's output
-    ScratchBuffer<float> m_coefficients; // [mode][sample] of the band with its halo
-    ScratchBuffer<float> m_rebuilt;      // [frame][sample] of sigma_rows()
-    std::vector<float> m_noise_variance; // sigma's s² of the valid rows
-    std::vector<float> m_gains;          // kept-noise gain per valid pixel and mode
+    std::vector<float> m_filtered;         // the filter's output
+    ScratchBuffer<float> m_coefficients;   // [mode][sample] of the band with its halo
+    ScratchBuffer<float> m_rebuilt;        // [frame][sample] of sigma_rows()
+    std::vector<float> m_noise_variance;   // sigma's s² of the valid rows
+    std::vector<float> m_gains;            // kept-noise gain per valid pixel and mode
+    std::vector<float> m_first_unfiltered; // the first mode's valid rows before the filter
+    std::vector<float> m_first_mode_bias;  // first_mode_filter_bias of the valid rows
 };
+
+/// Sigma's term for the mode filter's bias of the first mode, per sample
+/// (docs/design.md, "Sigma"). The first mode's coefficients are a weighted sum
+/// over every frame: its filter's bias d = filtered − unfiltered is measured
+/// with a frame's noise s²·(1 − gain), while a frame's rebuild carries it times
+/// B_t1² (about 1/F; add_first_mode_bias). That is a hard shadow's edge in the
+/// shot's mean light, which the first mode's plain Gaussian blurs and which no
+/// other term of sigma sees. b² is the posterior mean given d under a prior
+/// learnt per image row (lowrank/bias_prior.h), with the row's empirical null;
+/// an unfiltered value outside its row neighbours' range is first cut to it (a
+/// firefly left in the mode is not a bias of the filter). `samples` are whole
+/// image rows of `width` × `channels`; `gains` the first mode's, one per pixel.
+/// Throws modestack::Error (internal) on a partial row.
+void first_mode_filter_bias(const float* filtered, const float* unfiltered, const float* noise_variance,
+                            const float* gains, std::int64_t samples, int width, int channels, float* bias);
+/// Adds weight² · bias to the square of each of `samples` sigmas (weight: the
+/// frame's rebuild weight B_t1 of the first mode).
+void add_first_mode_bias(double weight, const float* bias, std::int64_t samples, float* sigma);
 
 } // namespace modestack::denoise

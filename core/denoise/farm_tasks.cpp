@@ -1,6 +1,7 @@
 #include "core/denoise/farm_tasks.h"
 
 #include "core/common/error.h"
+#include "core/denoise/band_rebuild.h"
 #include "core/denoise/block_gram.h"
 #include "core/denoise/frame_noise.h"
 #include "core/denoise/stage_modes.h"
@@ -268,6 +269,15 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
         std::vector<float> cleaned, raw;
         PassThroughRows pass_through;
     };
+    // The first mode's filter bias, from the coefficients the modes tasks kept
+    // (as a whole run's pass 2 makes it: band_rebuild.h).
+    std::vector<float> first_mode_bias;
+    if (shot.gain_modes > 0 && shot.output_modes > 0 && shot.residual_modes > 0) {
+        first_mode_bias.resize(static_cast<size_t>(samples));
+        first_mode_filter_bias(shot.output.data(), shot.residual.data(), shot.noise_variance.data(),
+                               shot.gains.data(), samples, shape.width, shape.channels,
+                               first_mode_bias.data());
+    }
     const EstimatorOptions& estimators = settings.estimators;
     std::vector<float> noise_scale; // the same for every frame: made once
     if (estimators.enabled()) {
@@ -335,6 +345,9 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                                  rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
                                  shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, shot.bias.data(),
                                  buffers.sigma.data());
+            if (!first_mode_bias.empty())
+                add_first_mode_bias(modes.temporal(t, 0), first_mode_bias.data(), samples,
+                                    buffers.sigma.data());
             std::vector<float>& output = shot.output_modes > 0 ? buffers.output : buffers.unfiltered;
             if (shot.output_modes > 0)
                 lowrank::rebuild_from_coefficients({shot.output.data(), samples, shot.output_modes, samples},

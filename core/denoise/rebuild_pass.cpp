@@ -149,6 +149,9 @@ void RebuildPass::add_rows(int row, int end)
                                  rebuilder.noise_variance().data(), modes.leverages(t),
                                  filter ? kept_noise.data() : nullptr, posteriors.data(),
                                  sigma + t * sigma_stride);
+        if (!rebuilder.first_mode_bias().empty())
+            add_first_mode_bias(modes.temporal(t, 0), rebuilder.first_mode_bias().data(), valid,
+                                sigma + t * sigma_stride);
     });
     lowrank::MutableBandView output_view{rebuilder.rebuilt().data() + (first - residual_begin) * row_samples,
                                          valid, frames, rebuilt_stride};

@@ -76,6 +76,20 @@ bool responsibilities(const Likelihoods& table, int bin, const std::vector<doubl
 
 } // namespace
 
+double bias_ratio_median(const BiasRatioCounts& counts)
+{
+    std::int64_t total = 0;
+    for (std::int64_t count : counts)
+        total += count;
+    std::int64_t below = 0;
+    for (int bin = 0; bin < kBiasBins; ++bin) {
+        below += counts[static_cast<std::size_t>(bin)];
+        if (total > 0 && 2 * below >= total)
+            return bin_ratio(bin);
+    }
+    return 0;
+}
+
 const std::vector<double>& bias_prior_variances()
 {
     // 0, then 2^-4 … 2^16: from a shade of the noise to far beyond it.

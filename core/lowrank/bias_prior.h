@@ -59,6 +59,9 @@ inline int bias_bin(double ratio)
     return 1 + (octave - kBiasLowestOctave) * kBiasBinsPerOctave + step;
 }
 
+/// The median of the counted t² (the centre of its bin; 0 without counts).
+double bias_ratio_median(const BiasRatioCounts& counts);
+
 /// The posterior of one row as two factors per bin: E[b² | μ, τ] =
 /// slope[bin] · μ² + offset[bin] · τ² (written so, τ² = 0 gives μ², never 0 · ∞).
 struct BiasPosterior {
