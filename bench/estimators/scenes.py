@@ -3,11 +3,13 @@
 reference's own noise (scenes.sh).
 
 The reference is the mean of two renders with other seeds, A and B; per pixel
-n = box3((A − B)² / 4) estimates the variance of that mean, so that
+n = (A − B)² / 4 estimates the variance of that mean, so that
 E[(x − ref)²] = (x − truth)² + n. relMSE = mean((x − ref)² − n) / (ref² + 0.01),
 the same denominator as `modestack compare`. Sigma is checked against the error
 it should bound plus the reference's noise: ratios of |x − ref| to
-sqrt(σ² + n). With one reference (B = none) and --spp NOISY/REF (the two
+sqrt(σ² + n), n there its 3×3 mean (less noisy per pixel; for relMSE the
+mean would lend a reference firefly's variance to its dark neighbours).
+With one reference (B = none) and --spp NOISY/REF (the two
 renders' samples per pixel, independent seeds), the noisy input's own
 difference to it gives n: E[(noisy − ref)²] = v_noisy + v_ref and v_noisy =
 v_ref·REF/NOISY, so n = box2 over ±2 frames of (noisy − ref)² · NOISY/(NOISY +
@@ -45,9 +47,9 @@ def relative(squared, ref):
     return squared / (ref ** 2 + 0.01)
 
 
-def score(name, x, sigma, ref, noise, noisy_rel, transient, frames_noisy):
+def score(name, x, sigma, ref, noise, noisy_rel, transient, frames_noisy, pixel_noise):
     e2 = (x - ref) ** 2
-    rel = relative(e2 - noise, ref)
+    rel = relative(e2 - pixel_noise, ref)
     shot = rel.mean()
     per_frame = rel.mean((1, 2, 3))
     line = (f"  {name:24s} relMSE {shot:.5f} = {shot / noisy_rel.mean():.2f}x input, worst frame "
@@ -75,22 +77,31 @@ class Scoring:
         if ref_b != 'none':
             b = read_shot(ref_b, layer)
             self.ref = (a + b) / 2
-            self.noise = box((a - b) ** 2 / 4, 1)
+            # Per pixel, (A − B)²/4 is exact in expectation: relMSE takes it so.
+            # Boxed, a reference's firefly would lend its variance to dark
+            # neighbours, whose relative error it then swamps (a glossy shot's
+            # caustics made relMSE net of the noise negative); sigma's ratios,
+            # per pixel, need the boxed estimate's lower noise.
+            self.pixel_noise = (a - b) ** 2 / 4
+            self.noise = box(self.pixel_noise, 1)
         elif spp:
             noisy_spp, ref_spp = (float(s) for s in spp.split('/'))
             self.ref = a
             self.noise = box((self.noisy - a) ** 2, 2, axes=(0, 1, 2)) * noisy_spp / (noisy_spp + ref_spp)
+            self.pixel_noise = self.noise
         else:
             self.ref, self.noise = a, np.zeros_like(a)
+            self.pixel_noise = self.noise
         self.transient = None
         if transient:
             first, last = (int(f) for f in transient.split('-'))
             self.transient = transient_mask(self.ref, first, last)
-        self.noisy_rel = relative((self.noisy - self.ref) ** 2 - self.noise, self.ref)
+        self.noisy_rel = relative((self.noisy - self.ref) ** 2 - self.pixel_noise, self.ref)
         self.frames_noisy = self.noisy_rel.mean((1, 2, 3))
 
     def line(self, name, x, sigma):
-        return score(name, x, sigma, self.ref, self.noise, self.noisy_rel, self.transient, self.frames_noisy)
+        return score(name, x, sigma, self.ref, self.noise, self.noisy_rel, self.transient, self.frames_noisy,
+                     self.pixel_noise)
 
 
 def main():
@@ -101,7 +112,7 @@ def main():
     parser.add_argument('--spp', help='NOISY/REF: with one reference, count its noise from the spp ratio')
     args = parser.parse_args()
     scoring = Scoring(args.noisy, args.ref_a, args.ref_b, args.layer, args.transient, args.spp)
-    noisy, ref, noise = scoring.noisy, scoring.ref, scoring.noise
+    noisy, ref, noise = scoring.noisy, scoring.ref, scoring.pixel_noise
     print(f"  reference noise: {relative(noise, ref).mean():.5f} relMSE "
           f"({relative(noise, ref).mean() / scoring.noisy_rel.mean() * 100:.1f} % of the input's)")
     print(scoring.line('input', noisy, None))
