@@ -6,7 +6,6 @@
 #include "core/lowrank/shrinkage.h"
 
 #include <algorithm>
-#include <cmath>
 
 namespace modestack::denoise {
 
@@ -99,10 +98,12 @@ void BandRebuilder::prepare(const Band& data, int row, int end, const lowrank::M
         {m_coefficients.data() + residual_first, rebuilt_stride, m_modes.kept_modes, data.rows},
         m_modes.temporal_rank, {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride});
     // The filter reads the noisy band, which the means may overwrite: it goes first.
-    if (m_settings.mode_filter.enabled) {
+    // The first mode's filter bias (below) needs its values before the filter.
+    const bool first_mode_filtered = m_settings.mode_filter.enabled && m_modes.rebuild_modes > 0;
+    if (first_mode_filtered)
         m_first_unfiltered.assign(m_coefficients.begin() + offset, m_coefficients.begin() + offset + valid);
+    if (m_settings.mode_filter.enabled)
         filter(data, row, end, ranks);
-    }
     lowrank::ImageBandShape shape{m_shape.width, residual_end - residual_begin, m_shape.channels};
     m_noise_variance.resize(static_cast<size_t>(valid));
     lowrank::residual_noise_variance(
@@ -116,7 +117,7 @@ void BandRebuilder::prepare(const Band& data, int row, int end, const lowrank::M
     // From the coefficients as the output is rebuilt from them (filtered, shrunk), as a farm's write task
     // does.
     m_first_mode_bias.clear();
-    if (m_settings.mode_filter.enabled && m_modes.rebuild_modes > 0) {
+    if (first_mode_filtered) {
         m_first_mode_bias.resize(static_cast<size_t>(valid));
         first_mode_filter_bias(m_coefficients.data() + offset, m_first_unfiltered.data(),
                                m_noise_variance.data(), m_gains.data(), valid, m_shape.width,
@@ -229,12 +230,12 @@ void first_mode_filter_bias(const float* filtered, const float* unfiltered, cons
     }
 }
 
-void add_first_mode_bias(double weight, const float* bias, std::int64_t samples, float* sigma)
+lowrank::SigmaExtraTerm first_mode_term(const Eigen::MatrixXd& temporal, int t,
+                                        const std::vector<float>& bias)
 {
-    const double weight_squared = weight * weight;
-    for (std::int64_t i = 0; i < samples; ++i)
-        sigma[i] = static_cast<float>(
-            std::sqrt(static_cast<double>(sigma[i]) * sigma[i] + weight_squared * bias[i]));
+    if (bias.empty())
+        return {};
+    return {bias.data(), temporal(t, 0) * temporal(t, 0)};
 }
 
 } // namespace modestack::denoise

@@ -111,7 +111,7 @@ private:
 /// (docs/design.md, "Sigma"). The first mode's coefficients are a weighted sum
 /// over every frame: its filter's bias d = filtered − unfiltered is measured
 /// with a frame's noise s²·(1 − gain), while a frame's rebuild carries it times
-/// B_t1² (about 1/F; add_first_mode_bias). That is a hard shadow's edge in the
+/// B_t1² (about 1/F; first_mode_term). That is a hard shadow's edge in the
 /// shot's mean light, which the first mode's plain Gaussian blurs and which no
 /// other term of sigma sees. b² is the posterior mean given d under a prior
 /// learnt per image row (lowrank/bias_prior.h), with the row's empirical null;
@@ -121,8 +121,9 @@ private:
 /// Throws modestack::Error (internal) on a partial row.
 void first_mode_filter_bias(const float* filtered, const float* unfiltered, const float* noise_variance,
                             const float* gains, std::int64_t samples, int width, int channels, float* bias);
-/// Adds weight² · bias to the square of each of `samples` sigmas (weight: the
-/// frame's rebuild weight B_t1 of the first mode).
-void add_first_mode_bias(double weight, const float* bias, std::int64_t samples, float* sigma);
+/// Sigma's term of frame t for that bias: `bias` (first_mode_filter_bias's
+/// output; empty: no term) times B_t1², the first mode's rebuild weight squared.
+lowrank::SigmaExtraTerm first_mode_term(const Eigen::MatrixXd& temporal, int t,
+                                        const std::vector<float>& bias);
 
 } // namespace modestack::denoise

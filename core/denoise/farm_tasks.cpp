@@ -344,10 +344,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             lowrank::frame_sigma(own.cleaned.data(), buffers.unfiltered.data(), image, 0, shape.height,
                                  rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
                                  shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, shot.bias.data(),
-                                 buffers.sigma.data());
-            if (!first_mode_bias.empty())
-                add_first_mode_bias(modes.temporal(t, 0), first_mode_bias.data(), samples,
-                                    buffers.sigma.data());
+                                 buffers.sigma.data(), first_mode_term(modes.temporal, t, first_mode_bias));
             std::vector<float>& output = shot.output_modes > 0 ? buffers.output : buffers.unfiltered;
             if (shot.output_modes > 0)
                 lowrank::rebuild_from_coefficients({shot.output.data(), samples, shot.output_modes, samples},

@@ -148,10 +148,8 @@ void RebuildPass::add_rows(int row, int end)
         lowrank::sigma_from_mean(residual_shape, first_valid, last_valid, rebuilder.confidence(),
                                  rebuilder.noise_variance().data(), modes.leverages(t),
                                  filter ? kept_noise.data() : nullptr, posteriors.data(),
-                                 sigma + t * sigma_stride);
-        if (!rebuilder.first_mode_bias().empty())
-            add_first_mode_bias(modes.temporal(t, 0), rebuilder.first_mode_bias().data(), valid,
-                                sigma + t * sigma_stride);
+                                 sigma + t * sigma_stride,
+                                 first_mode_term(modes.temporal, t, rebuilder.first_mode_bias()));
     });
     lowrank::MutableBandView output_view{rebuilder.rebuilt().data() + (first - residual_begin) * row_samples,
                                          valid, frames, rebuilt_stride};

@@ -275,14 +275,15 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
 
 void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape,
                  int valid_y0, int valid_y1, const ConfidenceOptions& options, const float* noise_variance,
-                 double leverage, const float* kept_noise, const BiasPosterior* posteriors, float* sigma)
+                 double leverage, const float* kept_noise, const BiasPosterior* posteriors, float* sigma,
+                 SigmaExtraTerm extra)
 {
     if (valid_y0 < 0 || valid_y1 > shape.height || valid_y0 > valid_y1 || options.radius < 0)
         throw internal_error("frame_sigma: output rows outside the band");
     ResidualWindows windows(shape, options.radius, valid_y0, valid_y1);
     windows.compute(noisy_frame, rebuilt_frame, sigma, nullptr);
     sigma_from_mean(shape, valid_y0, valid_y1, options, noise_variance, leverage, kept_noise, posteriors,
-                    sigma);
+                    sigma, extra);
 }
 
 namespace {
@@ -350,7 +351,8 @@ std::vector<BiasPosterior> row_bias_posteriors(const ImageBandShape& shape, int 
 
 void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1,
                      const ConfidenceOptions& options, const float* noise_variance, double leverage,
-                     const float* kept_noise, const BiasPosterior* posteriors, float* sigma)
+                     const float* kept_noise, const BiasPosterior* posteriors, float* sigma,
+                     SigmaExtraTerm extra)
 {
     // The windowed mean of pure noise has variance τ² = s²(1 − h_t)/|W|; the
     // bias is the posterior mean of b² under the row's prior (bias_prior.h).
@@ -366,7 +368,9 @@ void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1,
                                     posterior.slope[bin] * squared + posterior.offset[bin] * null;
                                 const double kept =
                                     kept_noise ? static_cast<double>(kept_noise[i]) : leverage;
-                                sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias));
+                                const double further =
+                                    extra.values ? extra.weight * static_cast<double>(extra.values[i]) : 0.0;
+                                sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias + further));
                             }
                         });
 }

@@ -98,17 +98,28 @@ void count_bias_ratios(const ImageBandShape& shape, int valid_y0, int valid_y1,
                        const ConfidenceOptions& options, const float* noise_variance, double leverage,
                        const float* means, BiasRatioCounts* counts);
 
+/// A further term of sigma², per output sample, times a factor of the frame:
+/// the mode filter's bias of the first mode times B_t1²
+/// (denoise/band_rebuild.h, first_mode_filter_bias). No values: none.
+struct SigmaExtraTerm {
+    const float* values = nullptr;
+    double weight = 0;
+};
+
 /// ... and sigma of one frame from its noisy and rebuilt values (whole band in
 /// `shape`), s², the frame's leverage h_t, or its kept noise per sample
-/// (null: h_t), and the output rows' posteriors. `sigma` receives the output rows.
+/// (null: h_t), the output rows' posteriors and any further term. `sigma`
+/// receives the output rows.
 void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape,
                  int valid_y0, int valid_y1, const ConfidenceOptions& options, const float* noise_variance,
-                 double leverage, const float* kept_noise, const BiasPosterior* posteriors, float* sigma);
+                 double leverage, const float* kept_noise, const BiasPosterior* posteriors, float* sigma,
+                 SigmaExtraTerm extra = {});
 
 /// frame_sigma's second half: `sigma` holds the frame's windowed residual
 /// mean of the output rows on entry (from residual_noise_variance) and its sigma on return.
 void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1,
                      const ConfidenceOptions& options, const float* noise_variance, double leverage,
-                     const float* kept_noise, const BiasPosterior* posteriors, float* sigma);
+                     const float* kept_noise, const BiasPosterior* posteriors, float* sigma,
+                     SigmaExtraTerm extra = {});
 
 } // namespace modestack::lowrank
