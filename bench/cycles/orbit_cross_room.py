@@ -170,15 +170,17 @@ def build_crossing_sphere(frames, hidden):
     key_constant(sphere)
 
 
-def build_camera(args):
+def make_camera(height):
+    """The scene's camera near the front wall at `height`, looking into the room."""
     cam_data = bpy.data.cameras.new('camera')
     cam_data.sensor_fit = 'VERTICAL'
     cam_data.angle_y = math.radians(58)
     cam = bpy.data.objects.new('camera', cam_data)
     bpy.context.scene.collection.objects.link(cam)
-    cam.location = (0.0, -2.35, 1.5)
+    cam.location = (0.0, -2.35, height)
     cam.rotation_euler = (Vector((0.0, 0.9, 0.55)) - cam.location).to_track_quat('-Z', 'Y').to_euler()
     bpy.context.scene.camera = cam
+    return cam
 
 
 def configure_render(args):
@@ -235,9 +237,14 @@ def main():
     build_static_objects()
     build_lights(frames)
     build_crossing_sphere(frames, args.without_crosser)
-    build_camera(args)
+    make_camera(1.5)
     configure_render(args)
+    render_and_time(args, 'orbit_cross_room')
 
+
+def render_and_time(args, shot):
+    """Renders the animation as configured and writes OUT/timing.json (seconds per
+    frame: scene sync + path tracing)."""
     times, start = {}, {}
     bpy.app.handlers.render_pre.append(lambda scene, *_: start.__setitem__('t', time.time()))
     bpy.app.handlers.render_post.append(
@@ -250,7 +257,7 @@ def main():
                    'frames': args.frames,
                    'per_frame_s': {str(k): round(v, 3) for k, v in sorted(times.items())},
                    'total_render_call_s': round(total, 2)}, f, indent=1)
-    print(f'orbit_cross_room: {len(times)} frames, {total:.1f} s')
+    print(f'{shot}: {len(times)} frames, {total:.1f} s')
 
 
 if __name__ == '__main__':  # pan_room.py imports the room and the render settings

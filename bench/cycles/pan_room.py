@@ -17,14 +17,12 @@ Run inside Blender (Debian 12 package, 3.4.1):
   blender -b -t 2 -P pan_room.py -- --spp 4 --seed 1 --frames 1-48 --res 128x96 --out DIR
 Writes DIR/frame.####.exr (multi-layer EXR, as orbit_cross_room.py) and DIR/timing.json.
 """
-import json
 import math
 import os
 import sys
-import time
 
 import bpy
-from mathutils import Euler, Vector
+from mathutils import Euler
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import orbit_cross_room as room  # noqa: E402
@@ -74,19 +72,13 @@ def build_lights():
 
 
 def build_panning_camera(frames):
-    cam_data = bpy.data.cameras.new('camera')
-    cam_data.sensor_fit = 'VERTICAL'
-    cam_data.angle_y = math.radians(58)
-    cam = bpy.data.objects.new('camera', cam_data)
-    bpy.context.scene.collection.objects.link(cam)
-    cam.location = (0.0, -2.35, 1.4)
-    look = (Vector((0.0, 0.9, 0.55)) - cam.location).to_track_quat('-Z', 'Y').to_euler()
+    cam = room.make_camera(1.4)
+    look = cam.rotation_euler.copy()
     for f in frames:
         yaw = math.radians(PAN_START_DEGREES + PAN_DEGREES_PER_FRAME * (f - 1))
         cam.rotation_euler = Euler((look.x, look.y, look.z + yaw), look.order)
         cam.keyframe_insert('rotation_euler', frame=f)
     room.key_constant(cam)
-    bpy.context.scene.camera = cam
 
 
 def main():
@@ -100,18 +92,7 @@ def main():
     build_lights()
     build_panning_camera(frames)
     room.configure_render(args)
-    times, start = {}, {}
-    bpy.app.handlers.render_pre.append(lambda scene, *_: start.__setitem__('t', time.time()))
-    bpy.app.handlers.render_post.append(
-        lambda scene, *_: times.__setitem__(scene.frame_current, time.time() - start['t']))
-    begin = time.time()
-    bpy.ops.render.render(animation=True)
-    total = time.time() - begin
-    with open(os.path.join(args.out, 'timing.json'), 'w') as f:
-        json.dump({'spp': args.spp, 'seed': args.seed, 'fixed_seed': args.fixed_seed, 'res': args.res,
-                   'frames': args.frames, 'per_frame_s': {str(k): round(v, 3) for k, v in sorted(times.items())},
-                   'total_render_call_s': round(total, 2)}, f, indent=1)
-    print(f'pan_room: {len(times)} frames, {total:.1f} s')
+    room.render_and_time(args, 'pan_room')
 
 
 if __name__ == '__main__':
