@@ -570,13 +570,16 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     const double below_limit = options.below_significance * options.below_significance * kBelowDeviation *
                                kBelowDeviation; // × scale², as one product in the same order
     const bool spread_test = estimator_frame_reach(options) > 0 && frame.spread != nullptr;
-    // The per-pixel test's reach in spreads by the spread's number of terms n
-    // (at most kMostSpreadTerms): below z·√b(n); above, √(2n) more.
-    std::array<double, kMostSpreadTerms + 1> below_reach{}, above_reach{};
-    for (int n = 1; spread_test && n <= kMostSpreadTerms; ++n) {
-        below_reach[static_cast<size_t>(n)] = options.below_significance * std::sqrt(spread_bound(n));
-        above_reach[static_cast<size_t>(n)] = std::sqrt(2.0 * n) + below_reach[static_cast<size_t>(n)];
-    }
+    // The per-pixel test's reach in spreads by the spread's estimate and number
+    // of terms n (at most kMostSpreadTerms): below z·√b(n); above, a lone
+    // sample's reach more.
+    std::array<std::array<double, kMostSpreadTerms + 1>, kSpreadEstimates> below_reach{}, above_reach{};
+    for (int e = 0; spread_test && e < kSpreadEstimates; ++e)
+        for (int n = 1; n <= kMostSpreadTerms; ++n) {
+            const auto i = static_cast<size_t>(e), k = static_cast<size_t>(n);
+            below_reach[i][k] = options.below_significance * std::sqrt(spread_bound(n));
+            above_reach[i][k] = lone_sample_reach(static_cast<SpreadEstimate>(e), n) + below_reach[i][k];
+        }
     std::vector<double> floor(static_cast<size_t>(channels));
     if (options.non_local) {
         work.biased.assign(static_cast<size_t>(end - row) * width, 0);
@@ -598,7 +601,8 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
         const float* engine_sigma = frame.sigma + (y - frame.rebuilt_begin) * row_samples;
         const float* below_row = below_test ? work.below_mean.row(y) : nullptr;
         const float* scale_row = below_test ? work.noise_scale_mean.row(y) : nullptr;
-        const std::int64_t spread_offset = static_cast<std::int64_t>(y - frame.spread_begin) * width;
+        const std::int64_t spread_offset =
+            static_cast<std::int64_t>(y - frame.spread_begin) * width * kSpreadEstimates;
         const float* spread_row = spread_test ? frame.spread + spread_offset : nullptr;
         const float* terms_row = spread_test ? frame.spread_terms + spread_offset : nullptr;
         const double kernel_y_squares[2] = {kernel_y[0].squares.empty() ? 0.0 : kernel_y[0].squares[y],
@@ -651,8 +655,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                     distance += static_cast<double>(input[c]) - taken[c];
                 distance *= per_channel;
                 // z spreads' upper bound below; above, beyond what a lone bright
-                // sample reaches (√(2n) spreads from its neighbour in time) by
-                // that neighbour's own z.
+                // sample reaches (lone_sample_reach) by its neighbours' own z.
                 // Noise that repeats is not in the spread: z of its part is added.
                 double repeating_limit = 0;
                 if (repeating) {
@@ -660,10 +663,15 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                         repeating_limit += repeating_row[static_cast<std::int64_t>(x) * channels + c];
                     repeating_limit *= per_channel * options.below_significance * options.below_significance;
                 }
-                const auto terms = static_cast<size_t>(terms_row[x]);
-                if (terms > 0) {
-                    const double reach = distance < 0 ? below_reach.at(terms) : above_reach.at(terms);
-                    if (distance * distance > reach * reach * spread_row[x] + repeating_limit)
+                for (int e = 0; e < kSpreadEstimates; ++e) { // either spread's test
+                    const std::int64_t i = static_cast<std::int64_t>(x) * kSpreadEstimates + e;
+                    const auto terms = static_cast<size_t>(terms_row[i]);
+                    if (terms == 0)
+                        continue;
+                    const auto& reaches = distance < 0 ? below_reach[static_cast<size_t>(e)]
+                                                       : above_reach[static_cast<size_t>(e)];
+                    const double reach = reaches.at(terms);
+                    if (distance * distance > reach * reach * spread_row[i] + repeating_limit)
                         rejected = true, chosen = static_cast<int>(Estimator::Input);
                 }
             }

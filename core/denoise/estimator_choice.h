@@ -50,11 +50,12 @@
 // cleaner than s says (the edge of a moving hard shadow lit by a point light).
 // There the input's spread in time (temporal_spread.h: its frame-to-frame
 // differences at the pixel and its row neighbours over the 4 frames on the
-// quieter side) is the evidence: the value the tests above took, the rebuild
-// or a blur, gives way to the input where the input lies below it by more
-// than z·√(b·v̂), or above it by more than (√(2n) + z)·√(b·v̂), with z the
-// one-sided test's, n the spread's terms and b its upper-bound factor
-// (spread_bound): a lone firefly cannot pass above. The input, not the least
+// quieter side, as they are and less that side's trend) is the evidence: the
+// value the tests above took, the rebuild or a blur, gives way to the input
+// where, by either spread, the input lies below it by more than z·√(b·v̂), or
+// above it by more than (r + z)·√(b·v̂), with z the one-sided test's, b the
+// spread's upper-bound factor (spread_bound) and r a lone sample's reach
+// (lone_sample_reach): a lone firefly cannot pass above. The input, not the least
 // 3×3 SURE: next to a bright edge a blur's SURE falls far below its error, and
 // a blur that won the window test there carries the edge's light onto a dim
 // neighbour as far as the rebuild would.
@@ -141,9 +142,9 @@ struct ChoiceFrame {
     /// power of the input's own high-pass to every candidate's noise variance.
     double repeating_share = 0;
     /// Per pixel of rows from spread_begin (covering the rows chosen): the
-    /// input's spread around this frame and its number of terms
-    /// (temporal_spread.h). Null, or no input among the estimators: no
-    /// per-pixel test.
+    /// input's spreads around this frame and their numbers of terms, as
+    /// spread_rows lays them out (temporal_spread.h). Null, or no input among
+    /// the estimators: no per-pixel test.
     const float* spread = nullptr;
     const float* spread_terms = nullptr;
     int spread_begin = 0;

@@ -377,7 +377,8 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                     judged_samples(own.raw.data(), own.cleaned.data(), samples, buffers.judged.data());
                     window.frames[kSpreadFrames] = buffers.judged.data();
                     const size_t pixels = static_cast<size_t>(image.width) * image.height;
-                    buffers.spread.resize(pixels), buffers.spread_terms.resize(pixels);
+                    buffers.spread.resize(pixels * kSpreadEstimates),
+                        buffers.spread_terms.resize(pixels * kSpreadEstimates);
                     spread_rows(window, 0, shape.height, buffers.spread.data(), buffers.spread_terms.data());
                     frame.spread = buffers.spread.data(), frame.spread_terms = buffers.spread_terms.data();
                     frame.spread_begin = 0;

@@ -229,8 +229,8 @@ void RebuildPass::add_rows(int row, int end)
             judged_samples(raw.data() + (row - raw_begin) * row_samples,
                            data.data + frame * data.stride + own_first, own, chosen.judged.data());
             window.frames[kSpreadFrames] = chosen.judged.data();
-            chosen.spread.resize(static_cast<size_t>(own_pixels));
-            chosen.spread_terms.resize(static_cast<size_t>(own_pixels));
+            chosen.spread.resize(static_cast<size_t>(own_pixels) * kSpreadEstimates);
+            chosen.spread_terms.resize(chosen.spread.size());
             spread_rows(window, row, end, chosen.spread.data(), chosen.spread_terms.data());
             choice_frame.spread = chosen.spread.data();
             choice_frame.spread_terms = chosen.spread_terms.data();

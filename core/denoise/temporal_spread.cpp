@@ -53,6 +53,13 @@ double spread_bound(int terms)
                                      : terms / chi_squared_quantile(terms, 1e-3);
 }
 
+double lone_sample_reach(SpreadEstimate estimate, int terms)
+{
+    if (terms < 1)
+        throw internal_error("lone_sample_reach: no terms");
+    return std::sqrt(2.0 * (estimate == SpreadEstimate::Steady ? terms : terms + 6));
+}
+
 void judged_samples(const float* as_read, const float* cleaned, std::int64_t samples, float* judged)
 {
     for (std::int64_t i = 0; i < samples; ++i)
@@ -87,8 +94,9 @@ void spread_rows(const SpreadWindow& window, int row, int end, float* spread, fl
     if (window.frames[K] == nullptr || row < 0 || end > window.image.height || row > end)
         throw internal_error("spread_rows: no judged frame, or rows outside the image");
     // Per side and pixel of a row: the sum over the side's differences (the
-    // nearest first) of their terms; then the sums of the row's 3 pixels.
-    thread_local std::vector<double> sums[2];
+    // nearest first) of their terms, and that sum less the side's trend; then
+    // the sums of the row's 3 pixels.
+    thread_local std::vector<double> sums[2], detrended[2];
     thread_local std::vector<float> made; // one row of a pair's terms
     made.resize(static_cast<size_t>(width));
     for (int y = row; y < end; ++y) {
@@ -115,25 +123,45 @@ void spread_rows(const SpreadWindow& window, int row, int end, float* spread, fl
                 for (int x = 0; x < width; ++x)
                     sum[static_cast<size_t>(x)] += pair[x];
             }
+            // Less the trend: Σ(d − d̄)² = Σd² − (Σd)²/m, and Σd is the side's
+            // end-to-end difference.
+            const int m = differences[side];
+            if (m < 2)
+                continue;
+            const int first = side == 0 ? K - m : K;
+            spread_pair_rows(window.image, window.rows_begin, window.frames[static_cast<size_t>(first)],
+                             window.frames[static_cast<size_t>(first + m)], y, y + 1, made.data());
+            detrended[side].resize(static_cast<size_t>(width));
+            for (int x = 0; x < width; ++x)
+                detrended[side][static_cast<size_t>(x)] =
+                    sum[static_cast<size_t>(x)] - made[static_cast<size_t>(x)] / m;
         }
-        float* spread_row = spread + static_cast<std::int64_t>(y - row) * width;
-        float* terms_row = terms + static_cast<std::int64_t>(y - row) * width;
+        const std::int64_t out = static_cast<std::int64_t>(y - row) * width * kSpreadEstimates;
         for (int x = 0; x < width; ++x) {
-            const int x0 = std::max(0, x - 1), x1 = std::min(width - 1, x + 1);
-            double best = std::numeric_limits<double>::infinity();
-            int best_terms = 0;
-            for (int side = 0; side < 2; ++side) {
-                if (differences[side] == 0)
-                    continue;
-                double total = 0;
-                for (int u = x0; u <= x1; ++u)
-                    total += sums[side][static_cast<size_t>(u)];
-                const int n = (x1 - x0 + 1) * differences[side];
-                if (total / n < best)
-                    best = total / n, best_terms = n;
+            const int x0 = std::max(0, x - 1), x1 = std::min(width - 1, x + 1), pixels = x1 - x0 + 1;
+            for (const SpreadEstimate estimate : {SpreadEstimate::Steady, SpreadEstimate::Trend}) {
+                const bool trend = estimate == SpreadEstimate::Trend;
+                double best = std::numeric_limits<double>::infinity();
+                int best_terms = 0;
+                for (int side = 0; side < 2; ++side) {
+                    // Of white noise of variance v, a pixel's sum has the mean m·v
+                    // (trend: (m − 1/m)·v, m − 1 degrees of freedom).
+                    const int m = differences[side];
+                    if (m < (trend ? 2 : 1))
+                        continue;
+                    const std::vector<double>& from = trend ? detrended[side] : sums[side];
+                    double total = 0;
+                    for (int u = x0; u <= x1; ++u)
+                        total += from[static_cast<size_t>(u)];
+                    const double here = std::max(total, 0.0) / (pixels * (trend ? m - 1.0 / m : m));
+                    if (here < best)
+                        best = here, best_terms = pixels * (trend ? m - 1 : m);
+                }
+                const std::int64_t i =
+                    out + static_cast<std::int64_t>(x) * kSpreadEstimates + static_cast<int>(estimate);
+                spread[i] = static_cast<float>(best);
+                terms[i] = static_cast<float>(best_terms);
             }
-            spread_row[x] = static_cast<float>(best);
-            terms_row[x] = static_cast<float>(best_terms);
         }
     }
 }

@@ -523,7 +523,7 @@ TEST_CASE(
     for (int k = 0, j = 0; k < 2 * kSpreadFrames + 1; ++k)
         window.frames[static_cast<size_t>(k)] = k == kSpreadFrames ? wall.input.data() : around[j++].data();
     const std::vector<std::uint8_t> without = wall.choose(false);
-    wall.spread.resize(static_cast<size_t>(wall.width) * wall.height);
+    wall.spread.resize(static_cast<size_t>(wall.width) * wall.height * kSpreadEstimates);
     wall.spread_terms.resize(wall.spread.size());
     spread_rows(window, 0, wall.height, wall.spread.data(), wall.spread_terms.data());
     std::vector<float> values;
@@ -597,7 +597,7 @@ TEST_CASE(
         window.frames[static_cast<size_t>(k)] = k == kSpreadFrames ? wall.input.data() : around[j++].data();
     std::vector<float> before, after;
     const std::vector<std::uint8_t> without = wall.choose(true, &before);
-    wall.spread.resize(static_cast<size_t>(wall.width) * wall.height);
+    wall.spread.resize(static_cast<size_t>(wall.width) * wall.height * kSpreadEstimates);
     wall.spread_terms.resize(wall.spread.size());
     spread_rows(window, 0, wall.height, wall.spread.data(), wall.spread_terms.data());
     const std::vector<std::uint8_t> with = wall.choose(true, &after);
