@@ -165,13 +165,21 @@ void BandRebuilder::filter(const Band& data, int row, int end, std::vector<float
 }
 
 void BandRebuilder::kept_noise_of_frame(const Eigen::MatrixXd& temporal, int t, int modes, const float* gains,
-                                        std::int64_t samples, float* kept) const
+                                        std::int64_t samples, float* kept, KeptNoise what) const
 {
     const std::int64_t pixels = samples / m_shape.channels;
+    // Per mode, V_tj² times what it holds of the noise.
+    thread_local std::vector<double> weights;
+    weights.resize(static_cast<size_t>(modes));
+    for (int j = 0; j < modes; ++j) {
+        const bool surveyed = what == KeptNoise::Noise && j < static_cast<int>(m_plan.modes.size());
+        weights[static_cast<size_t>(j)] = temporal(t, j) * temporal(t, j) *
+                                          (surveyed ? m_plan.modes[static_cast<size_t>(j)].noise_scale : 1.0);
+    }
     for (std::int64_t pixel = 0; pixel < pixels; ++pixel) {
         double sum = 0;
         for (int j = 0; j < modes; ++j)
-            sum += temporal(t, j) * temporal(t, j) * gains[static_cast<size_t>(j * pixels + pixel)];
+            sum += weights[static_cast<size_t>(j)] * gains[static_cast<size_t>(j * pixels + pixel)];
         std::fill_n(kept + pixel * m_shape.channels, m_shape.channels, static_cast<float>(sum));
     }
 }

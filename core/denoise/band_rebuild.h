@@ -46,6 +46,17 @@ RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& 
 const float* band_features(const ModeFilterOptions& filter, const FeatureGuide* guide, const Band& data,
                            std::vector<float>& features);
 
+/// What kept_noise_of_frame counts. The SVD gathers more than its share of
+/// noise into its noise modes, and a mode whose frames are noisier than the
+/// shot's mean (a light on in a few frames) holds more still; the mode filter
+/// measures that as each mode's noise scale (mode_filter.h). Sigma counts it.
+/// The choice's SURE needs the rebuild's derivative at the sample, which the
+/// noise a mode holds does not change: it takes the gains alone.
+enum class KeptNoise {
+    Gain,  ///< Σ_j V_tj² · gain_j(p): SURE's stand-in for the rebuild's derivative
+    Noise, ///< Σ_j V_tj² · gain_j(p) · noise_scale_j: the noise kept, for sigma
+};
+
 /// Pass 2 up to the frames for one band at a time; its buffers are reused from
 /// band to band (fresh pages would cost the kernel's zeroing every band).
 class BandRebuilder {
@@ -69,10 +80,13 @@ public:
 
     /// The image rows [begin, end) of `data` that sigma's windows read for rows [row, end).
     std::pair<int, int> sigma_rows(const Band& data, int row, int end) const;
-    /// The noise each rebuilt sample of frame t keeps under the mode filter,
-    /// h_t(p) = Σ_j V_tj² · gain_j(p), for `samples` samples of the gains' pixels.
+    /// What each rebuilt sample of frame t keeps of the noise under the mode
+    /// filter, for `samples` samples of the gains' pixels: KeptNoise::Gain
+    /// h_t(p) = Σ_j V_tj² · gain_j(p), in units of the pixel's noise as if every
+    /// mode held its share; KeptNoise::Noise weighs each mode by its measured
+    /// noise scale (ModeFilterChoice::noise_scale; 1 past the survey's modes).
     void kept_noise_of_frame(const Eigen::MatrixXd& temporal, int t, int modes, const float* gains,
-                             std::int64_t samples, float* kept) const;
+                             std::int64_t samples, float* kept, KeptNoise what) const;
 
     const lowrank::ConfidenceOptions& confidence() const { return m_confidence; }
     /// [mode][sample] of the last band with its halo.

@@ -259,7 +259,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     context.progress.begin(fmt::format("writing {} of {} frames", written.size(), shape.frames),
                            static_cast<std::int64_t>(written.size()));
     struct Buffers {
-        std::vector<float> unfiltered, kept_noise, sigma, output, chosen, chosen_sigma;
+        std::vector<float> unfiltered, kept_noise, kept_gain, sigma, output, chosen, chosen_sigma;
         std::vector<std::uint8_t> chosen_estimators; // per pixel
         std::vector<float> spread, spread_terms, judged; // the per-pixel test's
     };
@@ -332,15 +332,18 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             const int t = written[static_cast<size_t>(k)];
             Buffers& buffers = thread_buffers.local();
             ReadFrame& own = held.at(t);
-            for (std::vector<float>* buffer :
-                 {&buffers.unfiltered, &buffers.kept_noise, &buffers.sigma, &buffers.output})
+            for (std::vector<float>* buffer : {&buffers.unfiltered, &buffers.kept_noise, &buffers.kept_gain,
+                                               &buffers.sigma, &buffers.output})
                 buffer->resize(static_cast<size_t>(samples));
             lowrank::rebuild_from_coefficients({shot.residual.data(), samples, shot.residual_modes, samples},
                                                modes.temporal_rank.row(t),
                                                {buffers.unfiltered.data(), samples, 1, samples});
-            if (shot.gain_modes > 0)
+            if (shot.gain_modes > 0) {
                 rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
-                                              buffers.kept_noise.data());
+                                              buffers.kept_noise.data(), KeptNoise::Noise);
+                rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
+                                              buffers.kept_gain.data(), KeptNoise::Gain);
+            }
             lowrank::frame_sigma(own.cleaned.data(), buffers.unfiltered.data(), image, 0, shape.height,
                                  rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
                                  shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, shot.bias.data(),
@@ -361,7 +364,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                 frame.image = image;
                 frame.input = own.raw.data(), frame.input_begin = 0, frame.input_end = shape.height;
                 frame.rebuilt = output.data(), frame.sigma = buffers.sigma.data();
-                frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr;
+                frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_gain.data() : nullptr;
                 frame.noise_scale = noise_scale.data();
                 frame.noise_factor = solved.frame_noise_factors.at(static_cast<size_t>(t));
                 frame.repeating_share = plan.repeating.counted_share();

@@ -132,10 +132,10 @@ void RebuildPass::add_rows(int row, int end)
     const std::int64_t rebuilt_stride = (residual_end - residual_begin) * row_samples;
     const lowrank::ImageBandShape residual_shape{shape.width, residual_end - residual_begin, shape.channels};
     const int first_valid = first - residual_begin, last_valid = last - residual_begin;
-    auto kept_noise_of = [&](int t, std::vector<float>& kept_noise) {
+    auto kept_noise_of = [&](int t, std::vector<float>& kept_noise, KeptNoise what) {
         kept_noise.resize(static_cast<size_t>(valid));
         rebuilder.kept_noise_of_frame(modes.temporal, t, modes.rebuild_modes, rebuilder.gains().data(), valid,
-                                      kept_noise.data());
+                                      kept_noise.data(), what);
     };
     // Each row's bias prior from all its frames' means, before any frame's sigma.
     const std::vector<lowrank::BiasPosterior> posteriors =
@@ -144,7 +144,7 @@ void RebuildPass::add_rows(int row, int end)
     tbb::parallel_for(0, frames, [&](int t) {
         std::vector<float>& kept_noise = m_kept_noise_of_worker.local(); // nothing below runs in parallel
         if (filter)
-            kept_noise_of(t, kept_noise);
+            kept_noise_of(t, kept_noise, KeptNoise::Noise);
         lowrank::sigma_from_mean(residual_shape, first_valid, last_valid, rebuilder.confidence(),
                                  rebuilder.noise_variance().data(), modes.leverages(t),
                                  filter ? kept_noise.data() : nullptr, posteriors.data(),
@@ -202,7 +202,7 @@ void RebuildPass::add_rows(int row, int end)
         // here: one frame per worker, not every frame's.
         std::vector<float>& kept_noise = m_kept_noise_of_worker.local();
         if (filter)
-            kept_noise_of(frame, kept_noise);
+            kept_noise_of(frame, kept_noise, KeptNoise::Gain);
         ScratchBuffer<float>& raw = m_raw_of_worker.local();
         m_stream.read_raw_frame_rows(frame, raw_begin, raw_end, data, raw);
         ChoiceFrame choice_frame;

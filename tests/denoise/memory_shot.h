@@ -2,6 +2,7 @@
 // sink that collects what the engine writes, checking rows arrive in order.
 #pragma once
 
+#include "core/denoise/engine.h"
 #include "core/denoise/frame_stream.h"
 
 #include <doctest/doctest.h>
@@ -108,6 +109,16 @@ inline double mean_square(const std::vector<std::vector<float>>& a, const std::v
         for (std::size_t i = 0; i < a[t].size(); ++i, ++count)
             sum += (double(a[t][i]) - b[t][i]) * (double(a[t][i]) - b[t][i]);
     return sum / count;
+}
+
+/// The engine's defaults with the mode filter on and no firefly clamp: for
+/// shots under Gaussian noise, which has no fireflies.
+inline Settings gaussian_noise_settings()
+{
+    Settings settings;
+    settings.mode_filter.enabled = true;
+    settings.outliers.fireflies = false;
+    return settings;
 }
 
 }  // namespace modestack::denoise::testing

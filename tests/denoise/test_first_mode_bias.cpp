@@ -115,11 +115,8 @@ TEST_CASE("first mode bias: sigma covers a hard shadow edge that the first mode'
                     frame[(static_cast<size_t>(y) * width + x) * 3 + c] = truth(x) + normal(generator);
         shot.frames.push_back(frame);
     }
-    Settings settings;
-    settings.mode_filter.enabled = true;
-    settings.outliers.fireflies = false; // Gaussian noise has no fireflies
     MemorySink sink(shot.size);
-    const Report report = run_denoise(shot, sink, settings, Progress::silent());
+    const Report report = run_denoise(shot, sink, gaussian_noise_settings(), Progress::silent());
     REQUIRE(report.mode_filter.modes.size() > 0);
     MESSAGE("first mode's width " << report.mode_filter.modes[0].width);
     REQUIRE(report.mode_filter.modes[0].width > 0);
