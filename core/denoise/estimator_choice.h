@@ -53,9 +53,10 @@
 // quieter side, as they are and less that side's trend) is the evidence: the
 // value the tests above took, the rebuild or a blur, gives way to the input
 // where, by either spread, the input lies below it by more than z·√(b·v̂), or
-// above it by more than (r + z)·√(b·v̂), with z the one-sided test's, b the
+// above it by more than (r + z·√b)·√v̂, with z the one-sided test's, b the
 // spread's upper-bound factor (spread_bound) and r a lone sample's reach
-// (lone_sample_reach): a lone firefly cannot pass above. The input, not the least
+// (lone_sample_reach, a hard bound in spreads): a lone firefly cannot pass
+// above. The input, not the least
 // 3×3 SURE: next to a bright edge a blur's SURE falls far below its error, and
 // a blur that won the window test there carries the edge's light onto a dim
 // neighbour as far as the rebuild would.

@@ -332,15 +332,17 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             const int t = written[static_cast<size_t>(k)];
             Buffers& buffers = thread_buffers.local();
             ReadFrame& own = held.at(t);
-            for (std::vector<float>* buffer : {&buffers.unfiltered, &buffers.kept_noise, &buffers.kept_gain,
-                                               &buffers.sigma, &buffers.output})
+            for (std::vector<float>* buffer :
+                 {&buffers.unfiltered, &buffers.kept_noise, &buffers.sigma, &buffers.output})
                 buffer->resize(static_cast<size_t>(samples));
             lowrank::rebuild_from_coefficients({shot.residual.data(), samples, shot.residual_modes, samples},
                                                modes.temporal_rank.row(t),
                                                {buffers.unfiltered.data(), samples, 1, samples});
-            if (shot.gain_modes > 0) {
+            if (shot.gain_modes > 0)
                 rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
                                               buffers.kept_noise.data(), KeptNoise::Noise);
+            if (shot.gain_modes > 0 && estimators.enabled()) { // the choice's: the gains alone
+                buffers.kept_gain.resize(static_cast<size_t>(samples));
                 rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
                                               buffers.kept_gain.data(), KeptNoise::Gain);
             }

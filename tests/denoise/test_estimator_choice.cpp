@@ -503,8 +503,8 @@ TEST_CASE(
     // The frames around: the wall's noise afresh in each, but two pixels the
     // rebuild misses read the same in every frame, as a lit or shadowed edge
     // does while the rebuild shows other frames' light: 0.5 above it (about 19
-    // spreads are needed above, the row neighbours' noise making the spread
-    // about (0.016)²) and 0.3 below (14 spreads).
+    // steady spreads are needed above, 22 less the trend, the row neighbours'
+    // noise making the spread about (0.016)²) and 0.3 below (14 spreads).
     const int above_x = 20, below_x = 40, row = 20, firefly_x = 44, firefly_y = 30;
     std::mt19937 generator(5);
     std::normal_distribution<float> normal(0.0f, 0.02f);
