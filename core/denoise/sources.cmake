@@ -16,6 +16,7 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/segments.cpp
   ${CMAKE_CURRENT_LIST_DIR}/stage_modes.cpp
   ${CMAKE_CURRENT_LIST_DIR}/stage_task.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/temporal_misfit.cpp
   ${CMAKE_CURRENT_LIST_DIR}/temporal_spread.cpp
   ${CMAKE_CURRENT_LIST_DIR}/training.cpp
   ${CMAKE_CURRENT_LIST_DIR}/transform.cpp

@@ -1,0 +1,126 @@
+#include "core/denoise/temporal_misfit.h"
+
+#include "core/common/error.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+
+namespace modestack::denoise {
+namespace {
+
+constexpr double kSideTail = 0.5e-4; // each side's two-sided tail probability
+
+// P(|T| ≤ t) for Student's t with ν degrees of freedom, by the finite sums of
+// Abramowitz & Stegun 26.7.3 (ν odd) and 26.7.4 (ν even), θ = atan(t/√ν).
+double t_central(int freedom, double t)
+{
+    const double theta = std::atan(t / std::sqrt(static_cast<double>(freedom)));
+    const double sine = std::sin(theta), cosine_squared = std::cos(theta) * std::cos(theta);
+    double term = 1, sum = 1;
+    if (freedom % 2 == 0) {
+        for (int k = 2; k <= freedom - 2; k += 2)
+            term *= cosine_squared * (k - 1) / k, sum += term;
+        return sine * sum;
+    }
+    if (freedom == 1)
+        return 2 * theta / M_PI;
+    for (int k = 3; k <= freedom - 2; k += 2)
+        term *= cosine_squared * (k - 1) / k, sum += term;
+    return 2 / M_PI * (theta + sine * std::cos(theta) * sum);
+}
+
+// t² limits by degrees of freedom.
+const std::array<double, kMostMisfitFreedom + 1>& squared_limits()
+{
+    static const auto table = [] {
+        std::array<double, kMostMisfitFreedom + 1> limits{};
+        for (int freedom = 1; freedom <= kMostMisfitFreedom; ++freedom)
+            limits[static_cast<size_t>(freedom)] = misfit_limit(freedom) * misfit_limit(freedom);
+        return limits;
+    }();
+    return table;
+}
+
+} // namespace
+
+double misfit_limit(int freedom)
+{
+    if (freedom < 1)
+        throw internal_error("misfit_limit: no degrees of freedom");
+    double low = 0, high = 1e7; // the Cauchy (ν = 1) quantile is about 1.3·10⁴
+    for (int i = 0; i < 200; ++i) {
+        const double middle = (low + high) / 2;
+        (1 - t_central(freedom, middle) > kSideTail ? low : high) = middle;
+    }
+    return (low + high) / 2;
+}
+
+void misfit_rows(const MisfitWindow& window, int row, int end, float* misfit)
+{
+    const int width = window.image.width, channels = window.image.channels;
+    const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
+    const double per_channel = 1.0 / channels;
+    constexpr int judged = kMisfitFrames;
+    for (int y = row; y < end; ++y) {
+        const std::int64_t offset = (y - window.rows_begin) * row_samples;
+        for (int x = 0; x < width; ++x) {
+            float* out = misfit + (static_cast<std::int64_t>(y - row) * width + x) * kMisfitValues;
+            for (int side = 0; side < 2; ++side) {
+                const int first = side == 0 ? 0 : judged, last = side == 0 ? judged : 2 * judged;
+                double scatter = 0, pixel_mean = 0;
+                int freedom = 0, pixel_frames = 0;
+                for (int q = std::max(0, x - 1); q <= std::min(width - 1, x + 1); ++q) {
+                    std::array<double, kMisfitFrames + 1> residuals{};
+                    int n = 0;
+                    for (int k = first; k <= last; ++k) {
+                        const float *input = window.input[static_cast<size_t>(k)],
+                                    *rebuilt = window.rebuilt[static_cast<size_t>(k)];
+                        if (input == nullptr || rebuilt == nullptr)
+                            continue;
+                        double residual = 0;
+                        for (int c = 0; c < channels; ++c) {
+                            const std::int64_t i = offset + static_cast<std::int64_t>(q) * channels + c;
+                            residual += static_cast<double>(input[i]) - rebuilt[i];
+                        }
+                        residuals[static_cast<size_t>(n++)] = residual * per_channel;
+                    }
+                    double mean = 0;
+                    for (int i = 0; i < n; ++i)
+                        mean += residuals[static_cast<size_t>(i)];
+                    mean = n > 0 ? mean / n : 0.0;
+                    for (int i = 0; i < n; ++i) {
+                        const double deviation = residuals[static_cast<size_t>(i)] - mean;
+                        scatter += deviation * deviation;
+                    }
+                    freedom += std::max(n - 1, 0);
+                    if (q == x)
+                        pixel_mean = mean, pixel_frames = n;
+                }
+                float* values = out + side * (kMisfitValues / 2);
+                values[0] = static_cast<float>(pixel_mean);
+                values[1] = freedom > 0 ? static_cast<float>(scatter / freedom) : 0.0f;
+                values[2] = static_cast<float>(pixel_frames);
+                values[3] = static_cast<float>(freedom);
+            }
+        }
+    }
+}
+
+bool lasting_misfit(const float* misfit, double rebuilt_variance)
+{
+    const auto& limits = squared_limits();
+    for (int side = 0; side < 2; ++side) {
+        const float* values = misfit + side * (kMisfitValues / 2);
+        const double mean = values[0], scatter = values[1];
+        const int freedom = static_cast<int>(values[3]);
+        if (freedom < 1 || rebuilt_variance < scatter)
+            continue;
+        // t² = mean²·n / s² beyond its limit, without a division (s² may be 0).
+        if (mean * mean * values[2] > limits[static_cast<size_t>(freedom)] * scatter)
+            return true;
+    }
+    return false;
+}
+
+} // namespace modestack::denoise
