@@ -3,6 +3,7 @@
 #include "core/common/avx2_clones.h"
 #include "core/common/error.h"
 #include "core/denoise/non_local_means.h"
+#include "core/denoise/temporal_misfit.h"
 #include "core/denoise/temporal_spread.h"
 
 #include <algorithm>
@@ -236,7 +237,7 @@ int estimator_rebuilt_reach(const EstimatorOptions& options)
 
 int estimator_frame_reach(const EstimatorOptions& options)
 {
-    return options.input ? kSpreadFrames : 0;
+    return options.input ? std::max(kSpreadFrames, kMisfitFrames) : 0;
 }
 
 int estimator_input_reach(const EstimatorOptions& options)
@@ -605,6 +606,10 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             static_cast<std::int64_t>(y - frame.spread_begin) * width * kSpreadEstimates;
         const float* spread_row = spread_test ? frame.spread + spread_offset : nullptr;
         const float* terms_row = spread_test ? frame.spread_terms + spread_offset : nullptr;
+        const float* misfit_row =
+            frame.misfit != nullptr && options.input
+                ? frame.misfit + static_cast<std::int64_t>(y - frame.misfit_begin) * width * kMisfitValues
+                : nullptr;
         const double kernel_y_squares[2] = {kernel_y[0].squares.empty() ? 0.0 : kernel_y[0].squares[y],
                                             kernel_y[1].squares.empty() ? 0.0 : kernel_y[1].squares[y]};
         for (int x = 0; x < width; ++x) {
@@ -674,6 +679,18 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                     if (distance * distance > reach * reach * spread_row[i] + repeating_limit)
                         rejected = true, chosen = static_cast<int>(Estimator::Input);
                 }
+            }
+            // The rebuild's lasting misfit (temporal_misfit.h), where the rebuild
+            // rates itself no better than the input's scatter: the input.
+            if (misfit_row != nullptr && chosen == 0) {
+                double rebuilt_variance = 0;
+                for (int c = 0; c < channels; ++c) {
+                    const double engine = engine_sigma[static_cast<std::int64_t>(x) * channels + c];
+                    rebuilt_variance += engine * engine;
+                }
+                if (lasting_misfit(misfit_row + static_cast<std::int64_t>(x) * kMisfitValues,
+                                   rebuilt_variance * per_channel))
+                    rejected = true, chosen = static_cast<int>(Estimator::Input);
             }
             // Sigma: the chosen one's variance part, plus its pooled SURE's excess
             // (the bias the variance part does not see).

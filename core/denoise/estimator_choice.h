@@ -60,6 +60,12 @@
 // 3×3 SURE: next to a bright edge a blur's SURE falls far below its error, and
 // a blur that won the window test there carries the edge's light onto a dim
 // neighbour as far as the rebuild would.
+// A kept rebuild also gives way to the input where its misfit lasts
+// (temporal_misfit.h): the residual input − rebuild at the pixel keeps its sign
+// and size over the frames on one side beyond Student's t, and the engine's
+// own sigma² of the rebuild is at least the residuals' scatter (the rebuild
+// admits it is no better than the input's noise; alone, the test took runs of
+// bright indirect paths for misfits).
 // Non-local means of the input (non_local_means.h) keeps the hard edges a
 // Gaussian blurs, but its SURE is biased low on rendered noise, so it is never
 // evidence against the rebuild or any linear candidate: where the rebuild has
@@ -114,7 +120,8 @@ EstimatorOptions parse_estimators(const std::string& list);
 /// sigma and kept noise): the risk window of the high-pass's window.
 int estimator_rebuilt_reach(const EstimatorOptions& options);
 /// Frames on each side of a frame whose input the choice reads (the per-pixel
-/// test's spread, temporal_spread.h; 0 without the input as a candidate).
+/// test's spread, temporal_spread.h, and the lasting misfit's frames and their
+/// rebuilds, temporal_misfit.h; 0 without the input as a candidate).
 int estimator_frame_reach(const EstimatorOptions& options);
 /// Rows beyond a band's own rows that the choice needs of the input.
 int estimator_input_reach(const EstimatorOptions& options);
@@ -149,6 +156,12 @@ struct ChoiceFrame {
     const float* spread = nullptr;
     const float* spread_terms = nullptr;
     int spread_begin = 0;
+    /// Per pixel of rows from misfit_begin (covering the rows chosen): the
+    /// residual's statistics over the frames around, as misfit_rows lays them
+    /// out (temporal_misfit.h). Null, or no input among the estimators: no
+    /// test of a lasting misfit.
+    const float* misfit = nullptr;
+    int misfit_begin = 0;
     double leverage = 0;
     int rebuilt_begin = 0, rebuilt_end = 0;
 };

@@ -5,6 +5,7 @@
 #include "core/denoise/block_gram.h"
 #include "core/denoise/frame_noise.h"
 #include "core/denoise/stage_modes.h"
+#include "core/denoise/temporal_misfit.h"
 #include "core/denoise/temporal_spread.h"
 #include "core/lowrank/confidence.h"
 #include "core/lowrank/projection.h"
@@ -262,11 +263,13 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
         std::vector<float> unfiltered, kept_noise, kept_gain, sigma, output, chosen, chosen_sigma;
         std::vector<std::uint8_t> chosen_estimators; // per pixel
         std::vector<float> spread, spread_terms, judged; // the per-pixel test's
+        std::vector<float> misfit;                       // the residual's statistics in time
     };
     // A frame as read: cleaned by its patches, and for a written frame also as
     // read with only NaN/Inf cleaned (the choice judges that) and its other channels.
     struct ReadFrame {
         std::vector<float> cleaned, raw;
+        std::vector<float> rebuilt; // the output before the choice, for the choice's misfit test
         PassThroughRows pass_through;
     };
     // The first mode's filter bias, from the coefficients the modes tasks kept
@@ -287,6 +290,29 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
         noise_scale_rows(shot.noise_variance.data(), samples / shape.channels, shape.channels,
                          noise_scale.data());
     }
+    // Frame t's rebuild before the choice, in two steps (sigma reads the first
+    // before the second makes it non-negative where the output is unfiltered):
+    // the unfiltered rebuild, then the output (filtered where the filter is on,
+    // else the unfiltered rebuild) made non-negative.
+    auto unfiltered_of = [&](int t, std::vector<float>& unfiltered) {
+        unfiltered.resize(static_cast<size_t>(samples));
+        lowrank::rebuild_from_coefficients({shot.residual.data(), samples, shot.residual_modes, samples},
+                                           modes.temporal_rank.row(t),
+                                           {unfiltered.data(), samples, 1, samples});
+    };
+    auto output_of = [&](int t, std::vector<float>& unfiltered, std::vector<float>& output,
+                         NonNegativeCounts& counts) -> std::vector<float>& {
+        std::vector<float>& result = shot.output_modes > 0 ? output : unfiltered;
+        if (shot.output_modes > 0) {
+            output.resize(static_cast<size_t>(samples));
+            lowrank::rebuild_from_coefficients({shot.output.data(), samples, shot.output_modes, samples},
+                                               output_temporal.row(t), {output.data(), samples, 1, samples});
+        }
+        counts = make_non_negative({result.data(), samples, 1, samples}, settings.non_negative,
+                                   settings.non_negative_floor);
+        return result;
+    };
+    const bool misfit = estimator_frame_reach(estimators) > 0;
     auto read_frame = [&](int t, ReadFrame& frame) {
         const bool own = context.sink.writes_frame(t);
         frame.cleaned.resize(static_cast<size_t>(samples));
@@ -298,6 +324,14 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             frame.cleaned[static_cast<size_t>(patch.sample)] = patch.value;
             if (own && estimators.enabled() && !std::isfinite(frame.raw[static_cast<size_t>(patch.sample)]))
                 frame.raw[static_cast<size_t>(patch.sample)] = patch.value;
+        }
+        if (misfit) { // its counts are the written frame's own, counted where it is written
+            std::vector<float> unfiltered;
+            NonNegativeCounts counts;
+            unfiltered_of(t, unfiltered);
+            std::vector<float>& rebuilt = output_of(t, unfiltered, frame.rebuilt, counts);
+            if (&rebuilt != &frame.rebuilt)
+                frame.rebuilt.swap(rebuilt);
         }
     };
     // The written frames a chunk at a time, with the frames around them that
@@ -332,12 +366,9 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             const int t = written[static_cast<size_t>(k)];
             Buffers& buffers = thread_buffers.local();
             ReadFrame& own = held.at(t);
-            for (std::vector<float>* buffer :
-                 {&buffers.unfiltered, &buffers.kept_noise, &buffers.sigma, &buffers.output})
+            for (std::vector<float>* buffer : {&buffers.kept_noise, &buffers.sigma})
                 buffer->resize(static_cast<size_t>(samples));
-            lowrank::rebuild_from_coefficients({shot.residual.data(), samples, shot.residual_modes, samples},
-                                               modes.temporal_rank.row(t),
-                                               {buffers.unfiltered.data(), samples, 1, samples});
+            unfiltered_of(t, buffers.unfiltered);
             if (shot.gain_modes > 0)
                 rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
                                               buffers.kept_noise.data(), KeptNoise::Noise);
@@ -350,13 +381,8 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                                  rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
                                  shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, shot.bias.data(),
                                  buffers.sigma.data(), first_mode_term(modes.temporal, t, first_mode_bias));
-            std::vector<float>& output = shot.output_modes > 0 ? buffers.output : buffers.unfiltered;
-            if (shot.output_modes > 0)
-                lowrank::rebuild_from_coefficients({shot.output.data(), samples, shot.output_modes, samples},
-                                                   output_temporal.row(t),
-                                                   {output.data(), samples, 1, samples});
-            const NonNegativeCounts counts = make_non_negative(
-                {output.data(), samples, 1, samples}, settings.non_negative, settings.non_negative_floor);
+            NonNegativeCounts counts;
+            const std::vector<float>& output = output_of(t, buffers.unfiltered, buffers.output, counts);
             {
                 std::lock_guard<std::mutex> lock(counts_mutex);
                 report.non_negative += counts;
@@ -387,6 +413,22 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                     spread_rows(window, 0, shape.height, buffers.spread.data(), buffers.spread_terms.data());
                     frame.spread = buffers.spread.data(), frame.spread_terms = buffers.spread_terms.data();
                     frame.spread_begin = 0;
+                    // The residual's statistics in time, from the held frames' rebuilds.
+                    MisfitWindow misfit_window;
+                    misfit_window.image = image, misfit_window.rows_begin = 0;
+                    for (int j = 0; j < static_cast<int>(misfit_window.input.size()); ++j) {
+                        const int g = t + j - kMisfitFrames;
+                        if (g < 0 || g >= shape.frames)
+                            continue;
+                        const ReadFrame& around = held.at(g);
+                        misfit_window.input[static_cast<size_t>(j)] =
+                            j == kMisfitFrames ? own.raw.data() : around.cleaned.data();
+                        misfit_window.rebuilt[static_cast<size_t>(j)] =
+                            j == kMisfitFrames ? output.data() : around.rebuilt.data();
+                    }
+                    buffers.misfit.resize(pixels * kMisfitValues);
+                    misfit_rows(misfit_window, 0, shape.height, buffers.misfit.data());
+                    frame.misfit = buffers.misfit.data(), frame.misfit_begin = 0;
                 }
                 frame.leverage = modes.leverages(t);
                 frame.rebuilt_begin = 0, frame.rebuilt_end = shape.height;

@@ -177,6 +177,7 @@ private:
         std::vector<std::uint8_t> estimators;    // per pixel
         std::vector<float> spread, spread_terms; // per pixel: the input's spread in time
         std::vector<float> judged;               // the frame's rows the spread judges
+        std::vector<float> misfit;               // per pixel: the residual's statistics in time
     };
     const PassContext& m_context;
     ShotStream& m_stream;

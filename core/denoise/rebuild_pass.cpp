@@ -6,6 +6,7 @@
 // tasks too), and choose_frame_rows, which a farm's write task shares, live
 // here beside it.
 #include "core/denoise/passes.h"
+#include "core/denoise/temporal_misfit.h"
 #include "core/denoise/temporal_spread.h"
 
 #include "core/lowrank/projection.h"
@@ -235,6 +236,23 @@ void RebuildPass::add_rows(int row, int end)
             choice_frame.spread = chosen.spread.data();
             choice_frame.spread_terms = chosen.spread_terms.data();
             choice_frame.spread_begin = row;
+        }
+        if (spread) { // the residual's statistics in time, from the band's rows and their rebuilds
+            MisfitWindow window;
+            window.image = choice_frame.image, window.rows_begin = row;
+            for (int k = 0; k < static_cast<int>(window.input.size()); ++k) {
+                const int t = frame + k - kMisfitFrames;
+                if (t < 0 || t >= frames)
+                    continue;
+                window.input[static_cast<size_t>(k)] = k == kMisfitFrames
+                                                           ? raw.data() + (row - raw_begin) * row_samples
+                                                           : data.data + t * data.stride + own_first;
+                window.rebuilt[static_cast<size_t>(k)] =
+                    output_view.data + t * output_view.frame_stride + own_offset;
+            }
+            chosen.misfit.resize(static_cast<size_t>(own_pixels) * kMisfitValues);
+            misfit_rows(window, row, end, chosen.misfit.data());
+            choice_frame.misfit = chosen.misfit.data(), choice_frame.misfit_begin = row;
         }
         choice_frame.leverage = modes.leverages(frame);
         choice_frame.rebuilt_begin = first, choice_frame.rebuilt_end = last;

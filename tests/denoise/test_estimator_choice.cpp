@@ -7,6 +7,7 @@
 #include "core/common/error.h"
 #include "core/denoise/band_plan.h"
 #include "core/denoise/engine.h"
+#include "core/denoise/temporal_misfit.h"
 #include "core/denoise/temporal_spread.h"
 #include "tests/denoise/memory_shot.h"
 
@@ -294,6 +295,7 @@ struct WallFrame {
     double noise_factor = 1;
     double repeating_share = 0; // of the noise, repeating from frame to frame (repeating_noise.h)
     std::vector<float> spread, spread_terms; // the per-pixel test's, when set
+    std::vector<float> misfit;               // the residual's statistics in time, when set
     WallFrame(float noise, unsigned seed, float shot_noise = 0)
     {
         const size_t samples = static_cast<size_t>(width) * height * channels;
@@ -324,6 +326,8 @@ struct WallFrame {
         frame.rebuilt_begin = 0, frame.rebuilt_end = height;
         if (!spread.empty())
             frame.spread = spread.data(), frame.spread_terms = spread_terms.data(), frame.spread_begin = 0;
+        if (!misfit.empty())
+            frame.misfit = misfit.data(), frame.misfit_begin = 0;
         std::vector<float> chosen_values(input.size()), chosen_sigma(input.size());
         std::vector<std::uint8_t> chosen(static_cast<size_t>(width) * height);
         choose_estimators(parse_estimators(estimators), frame, 0, height, chosen_values.data(),
@@ -703,4 +707,49 @@ TEST_CASE("estimators: a blur's sigma counts the bias its risk shows, though no 
         CHECK(ratio > 0.7);
         CHECK(ratio < 1.25);
     }
+}
+
+TEST_CASE("estimators: a lasting misfit of single pixels takes the input where the rebuild's sigma admits "
+          "it is no better, and only there")
+{
+    WallFrame wall(0.02f, 21);
+    // Three single pixels the rebuild misses by 3 noise widths in this frame
+    // and, by their statistics in time, in the frames around (temporal_misfit.h):
+    // mean residual −0.06, scatter 0.02², 5 frames, 12 degrees of freedom before.
+    wall.misfit.assign(static_cast<size_t>(wall.width) * wall.height * kMisfitValues, 0.0f);
+    const int xs[] = {10, 30, 50};
+    for (int x : xs) {
+        for (int c = 0; c < wall.channels; ++c)
+            wall.rebuilt[wall.at(x, 20, c)] += 0.06f;
+        float* values = wall.misfit.data() + (static_cast<size_t>(20) * wall.width + x) * kMisfitValues;
+        values[0] = -0.06f, values[1] = 0.02f * 0.02f, values[2] = 5, values[3] = 12;
+    }
+    auto taken = [&](const std::vector<std::uint8_t>& chosen, int x) {
+        return static_cast<Estimator>(chosen[static_cast<size_t>(20) * wall.width + x]);
+    };
+    // The rebuild's sigma (0.2 × the noise) says it is far better than the
+    // input: the test is not asked.
+    const std::vector<std::uint8_t> sure = wall.choose(true);
+    for (int x : xs)
+        CHECK(taken(sure, x) == Estimator::Rebuild);
+    // Its sigma a little wider than the input's scatter there: the input.
+    for (int x : xs)
+        for (int c = 0; c < wall.channels; ++c)
+            wall.sigma[wall.at(x, 20, c)] = 0.021f;
+    const std::vector<std::uint8_t> unsure = wall.choose(true);
+    for (int x : xs)
+        CHECK(taken(unsure, x) == Estimator::Input);
+    // Without the input among the estimators there is no such test.
+    const std::vector<std::uint8_t> no_input = wall.choose(true, nullptr, "rebuild,spatial");
+    for (int x : xs)
+        CHECK(taken(no_input, x) != Estimator::Input);
+    // Elsewhere the rebuild stays where it was taken.
+    std::vector<float> plain_misfit;
+    wall.misfit.swap(plain_misfit);
+    const std::vector<std::uint8_t> without = wall.choose(true);
+    wall.misfit.swap(plain_misfit);
+    for (size_t i = 0; i < unsure.size(); ++i)
+        if (i != static_cast<size_t>(20) * wall.width + 10 &&
+            i != static_cast<size_t>(20) * wall.width + 30 && i != static_cast<size_t>(20) * wall.width + 50)
+            CHECK(unsure[i] == without[i]);
 }
