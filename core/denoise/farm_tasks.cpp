@@ -328,7 +328,8 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
         if (misfit) { // its counts are the written frame's own, counted where it is written
             std::vector<float> unfiltered;
             NonNegativeCounts counts;
-            unfiltered_of(t, unfiltered);
+            if (shot.output_modes == 0) // else the output is made from the filtered modes alone
+                unfiltered_of(t, unfiltered);
             std::vector<float>& rebuilt = output_of(t, unfiltered, frame.rebuilt, counts);
             if (&rebuilt != &frame.rebuilt)
                 frame.rebuilt.swap(rebuilt);

@@ -117,7 +117,7 @@ bool lasting_misfit(const float* misfit, double rebuilt_variance)
         if (freedom < 1 || rebuilt_variance < scatter)
             continue;
         // t² = mean²·n / s² beyond its limit, without a division (s² may be 0).
-        if (mean * mean * values[2] > limits[static_cast<size_t>(freedom)] * scatter)
+        if (mean * mean * values[2] > limits.at(static_cast<size_t>(freedom)) * scatter)
             return true;
     }
     return false;

@@ -13,9 +13,12 @@
 // with the scatter of the residuals about each pixel's own mean pooled over
 // the pixel and its two row neighbours (the misfit may change from pixel to
 // pixel, the noise level hardly does): t = mean·√n / s with n the pixel's
-// frames and s² the pooled scatter, 3·(n − 1) degrees of freedom. Render noise
-// is independent from frame to frame, and noise that repeats stays in the
-// rebuild, not in the residual.
+// frames and s² the pooled scatter, 3·(n − 1) degrees of freedom (2·(n − 1) at
+// the image's first and last column). Render noise is independent from frame
+// to frame with a seed that changes per frame; noise that repeats mostly stays
+// in the rebuild, and where it is not counted the part left in the residual
+// lasts too (a fixed-seed shot's direct light: 6 % of its pixels changed, the
+// shot's error the same, bench/results/estimators.md, section 22).
 //
 // A side fires beyond the two-sided 0.5·10⁻⁴ quantile of t (both sides: 10⁻⁴
 // of the pixels of a shot the rebuild fits). A lone firefly in the pixel's
@@ -23,11 +26,15 @@
 // indirect light is heavy-tailed and its bright paths can come back a few
 // frames running, so a run of high samples can pass where the rebuild was
 // right (it cost a benchmark shot's indirect light 2 %). The input is therefore
-// taken only where the engine's own sigma² of the rebuild is at least s²: the
-// rebuild rates itself no better than the input's scatter, and the test shows
-// that its error is real. Where the rebuild is sure of itself (sigma far below
-// the input's noise: the indirect light almost everywhere) the test is not
-// asked.
+// taken only where the engine's own sigma² of the rebuild (its channel mean) is
+// at least s² (of the channel-mean residual): the rebuild rates itself no
+// better than the input's scatter, and the test shows that its error is real.
+// Render noise is much alike in a pixel's channels, so the two are alike; for
+// noise independent between channels s² would be a third of a channel's and
+// the gate that much looser. Where the rebuild is sure of itself (sigma far
+// below the input's noise: the indirect light almost everywhere) the test is
+// not asked. A residual that does not scatter and is not 0 passes wherever
+// the rebuild's sigma is not below it: a noise-free input the rebuild misses.
 //
 // The judged frame's sample is the input as read (as the choice's risks see
 // it); the frames around are the engine's cleaned frames and their rebuilds.
