@@ -343,6 +343,93 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     std::map<int, ReadFrame> held; // its nodes stay put as others come and go
     tbb::enumerable_thread_specific<Buffers> thread_buffers;
     std::mutex counts_mutex;
+    // One written frame: its rebuild, sigma and choice, written to the sink.
+    auto write_frame = [&](int k) {
+        throw_if_cancelled();
+        const int t = written[static_cast<size_t>(k)];
+        Buffers& buffers = thread_buffers.local();
+        ReadFrame& own = held.at(t);
+        for (std::vector<float>* buffer : {&buffers.kept_noise, &buffers.sigma})
+            buffer->resize(static_cast<size_t>(samples));
+        unfiltered_of(t, buffers.unfiltered);
+        if (shot.gain_modes > 0)
+            rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
+                                          buffers.kept_noise.data(), KeptNoise::Noise);
+        if (shot.gain_modes > 0 && estimators.enabled()) { // the choice's: the gains alone
+            buffers.kept_gain.resize(static_cast<size_t>(samples));
+            rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
+                                          buffers.kept_gain.data(), KeptNoise::Gain);
+        }
+        lowrank::frame_sigma(own.cleaned.data(), buffers.unfiltered.data(), image, 0, shape.height,
+                             rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
+                             shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, shot.bias.data(),
+                             buffers.sigma.data(), first_mode_term(modes.temporal, t, first_mode_bias));
+        NonNegativeCounts counts;
+        const std::vector<float>& output = output_of(t, buffers.unfiltered, buffers.output, counts);
+        {
+            std::lock_guard<std::mutex> lock(counts_mutex);
+            report.non_negative += counts;
+        }
+        if (estimators.enabled()) { // the whole frame at once: every row the choice reads is here
+            ChoiceFrame frame;
+            frame.image = image;
+            frame.input = own.raw.data(), frame.input_begin = 0, frame.input_end = shape.height;
+            frame.rebuilt = output.data(), frame.sigma = buffers.sigma.data();
+            frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_gain.data() : nullptr;
+            frame.noise_scale = noise_scale.data();
+            frame.noise_factor = solved.frame_noise_factors.at(static_cast<size_t>(t));
+            frame.repeating_share = plan.repeating.counted_share();
+            if (reach > 0) { // the per-pixel test's spread, as a whole run makes it
+                SpreadWindow window;
+                window.image = image, window.rows_begin = 0;
+                for (int j = 0; j < static_cast<int>(window.frames.size()); ++j) {
+                    const int g = t + j - kSpreadFrames;
+                    if (g >= 0 && g < shape.frames && j != kSpreadFrames)
+                        window.frames[static_cast<size_t>(j)] = held.at(g).cleaned.data();
+                }
+                buffers.judged.resize(static_cast<size_t>(samples));
+                judged_samples(own.raw.data(), own.cleaned.data(), samples, buffers.judged.data());
+                window.frames[kSpreadFrames] = buffers.judged.data();
+                const size_t pixels = static_cast<size_t>(image.width) * image.height;
+                buffers.spread.resize(pixels * kSpreadEstimates),
+                    buffers.spread_terms.resize(pixels * kSpreadEstimates);
+                spread_rows(window, 0, shape.height, buffers.spread.data(), buffers.spread_terms.data());
+                frame.spread = buffers.spread.data(), frame.spread_terms = buffers.spread_terms.data();
+                frame.spread_begin = 0;
+                // The residual's statistics in time, from the held frames' rebuilds.
+                MisfitWindow misfit_window;
+                misfit_window.image = image, misfit_window.rows_begin = 0;
+                for (int j = 0; j < static_cast<int>(misfit_window.input.size()); ++j) {
+                    const int g = t + j - kMisfitFrames;
+                    if (g < 0 || g >= shape.frames)
+                        continue;
+                    const ReadFrame& around = held.at(g);
+                    misfit_window.input[static_cast<size_t>(j)] =
+                        j == kMisfitFrames ? own.raw.data() : around.cleaned.data();
+                    misfit_window.rebuilt[static_cast<size_t>(j)] =
+                        j == kMisfitFrames ? output.data() : around.rebuilt.data();
+                }
+                buffers.misfit.resize(pixels * kMisfitValues);
+                misfit_rows(misfit_window, 0, shape.height, buffers.misfit.data());
+                frame.misfit = buffers.misfit.data(), frame.misfit_begin = 0;
+            }
+            frame.leverage = modes.leverages(t);
+            frame.rebuilt_begin = 0, frame.rebuilt_end = shape.height;
+            buffers.chosen.resize(static_cast<size_t>(samples)),
+                buffers.chosen_sigma.resize(static_cast<size_t>(samples));
+            buffers.chosen_estimators.resize(static_cast<size_t>(image.width) * image.height);
+            report.estimator_choice[static_cast<size_t>(t)] =
+                choose_frame_rows(settings, frame, 0, shape.height, buffers.chosen.data(),
+                                  buffers.chosen_sigma.data(), buffers.chosen_estimators.data());
+            context.sink.write_rows(t, 0, shape.height, buffers.chosen.data(), buffers.chosen_sigma.data(),
+                                    &own.pass_through);
+            context.sink.write_choice_rows(t, 0, shape.height, buffers.chosen_estimators.data());
+        } else {
+            context.sink.write_rows(t, 0, shape.height, output.data(), buffers.sigma.data(),
+                                    &own.pass_through);
+        }
+        context.progress.advance(1);
+    };
     for (size_t from = 0; from < written.size(); from += chunk) {
         const size_t to = std::min(written.size(), from + chunk);
         std::set<int> needed;
@@ -362,92 +449,11 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             throw_if_cancelled();
             read_frame(missing[static_cast<size_t>(i)], held.at(missing[static_cast<size_t>(i)]));
         });
-        tbb::parallel_for(static_cast<int>(from), static_cast<int>(to), [&](int k) {
-            throw_if_cancelled();
-            const int t = written[static_cast<size_t>(k)];
-            Buffers& buffers = thread_buffers.local();
-            ReadFrame& own = held.at(t);
-            for (std::vector<float>* buffer : {&buffers.kept_noise, &buffers.sigma})
-                buffer->resize(static_cast<size_t>(samples));
-            unfiltered_of(t, buffers.unfiltered);
-            if (shot.gain_modes > 0)
-                rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
-                                              buffers.kept_noise.data(), KeptNoise::Noise);
-            if (shot.gain_modes > 0 && estimators.enabled()) { // the choice's: the gains alone
-                buffers.kept_gain.resize(static_cast<size_t>(samples));
-                rebuilder.kept_noise_of_frame(modes.temporal, t, shot.gain_modes, shot.gains.data(), samples,
-                                              buffers.kept_gain.data(), KeptNoise::Gain);
-            }
-            lowrank::frame_sigma(own.cleaned.data(), buffers.unfiltered.data(), image, 0, shape.height,
-                                 rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
-                                 shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, shot.bias.data(),
-                                 buffers.sigma.data(), first_mode_term(modes.temporal, t, first_mode_bias));
-            NonNegativeCounts counts;
-            const std::vector<float>& output = output_of(t, buffers.unfiltered, buffers.output, counts);
-            {
-                std::lock_guard<std::mutex> lock(counts_mutex);
-                report.non_negative += counts;
-            }
-            if (estimators.enabled()) { // the whole frame at once: every row the choice reads is here
-                ChoiceFrame frame;
-                frame.image = image;
-                frame.input = own.raw.data(), frame.input_begin = 0, frame.input_end = shape.height;
-                frame.rebuilt = output.data(), frame.sigma = buffers.sigma.data();
-                frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_gain.data() : nullptr;
-                frame.noise_scale = noise_scale.data();
-                frame.noise_factor = solved.frame_noise_factors.at(static_cast<size_t>(t));
-                frame.repeating_share = plan.repeating.counted_share();
-                if (reach > 0) { // the per-pixel test's spread, as a whole run makes it
-                    SpreadWindow window;
-                    window.image = image, window.rows_begin = 0;
-                    for (int j = 0; j < static_cast<int>(window.frames.size()); ++j) {
-                        const int g = t + j - kSpreadFrames;
-                        if (g >= 0 && g < shape.frames && j != kSpreadFrames)
-                            window.frames[static_cast<size_t>(j)] = held.at(g).cleaned.data();
-                    }
-                    buffers.judged.resize(static_cast<size_t>(samples));
-                    judged_samples(own.raw.data(), own.cleaned.data(), samples, buffers.judged.data());
-                    window.frames[kSpreadFrames] = buffers.judged.data();
-                    const size_t pixels = static_cast<size_t>(image.width) * image.height;
-                    buffers.spread.resize(pixels * kSpreadEstimates),
-                        buffers.spread_terms.resize(pixels * kSpreadEstimates);
-                    spread_rows(window, 0, shape.height, buffers.spread.data(), buffers.spread_terms.data());
-                    frame.spread = buffers.spread.data(), frame.spread_terms = buffers.spread_terms.data();
-                    frame.spread_begin = 0;
-                    // The residual's statistics in time, from the held frames' rebuilds.
-                    MisfitWindow misfit_window;
-                    misfit_window.image = image, misfit_window.rows_begin = 0;
-                    for (int j = 0; j < static_cast<int>(misfit_window.input.size()); ++j) {
-                        const int g = t + j - kMisfitFrames;
-                        if (g < 0 || g >= shape.frames)
-                            continue;
-                        const ReadFrame& around = held.at(g);
-                        misfit_window.input[static_cast<size_t>(j)] =
-                            j == kMisfitFrames ? own.raw.data() : around.cleaned.data();
-                        misfit_window.rebuilt[static_cast<size_t>(j)] =
-                            j == kMisfitFrames ? output.data() : around.rebuilt.data();
-                    }
-                    buffers.misfit.resize(pixels * kMisfitValues);
-                    misfit_rows(misfit_window, 0, shape.height, buffers.misfit.data());
-                    frame.misfit = buffers.misfit.data(), frame.misfit_begin = 0;
-                }
-                frame.leverage = modes.leverages(t);
-                frame.rebuilt_begin = 0, frame.rebuilt_end = shape.height;
-                buffers.chosen.resize(static_cast<size_t>(samples)),
-                    buffers.chosen_sigma.resize(static_cast<size_t>(samples));
-                buffers.chosen_estimators.resize(static_cast<size_t>(image.width) * image.height);
-                report.estimator_choice[static_cast<size_t>(t)] =
-                    choose_frame_rows(settings, frame, 0, shape.height, buffers.chosen.data(),
-                                      buffers.chosen_sigma.data(), buffers.chosen_estimators.data());
-                context.sink.write_rows(t, 0, shape.height, buffers.chosen.data(),
-                                        buffers.chosen_sigma.data(), &own.pass_through);
-                context.sink.write_choice_rows(t, 0, shape.height, buffers.chosen_estimators.data());
-            } else {
-                context.sink.write_rows(t, 0, shape.height, output.data(), buffers.sigma.data(),
-                                        &own.pass_through);
-            }
-            context.progress.advance(1);
-        });
+        // Isolated: the rebuilds below run parallel loops of their own, and a
+        // worker waiting on one must not take another frame of this loop, whose
+        // thread_buffers.local() would be the very buffers the waiting frame holds.
+        tbb::parallel_for(static_cast<int>(from), static_cast<int>(to),
+                          [&](int k) { tbb::this_task_arena::isolate([&] { write_frame(k); }); });
     }
     context.progress.end();
     report.seconds_rebuild = seconds_since(start);
