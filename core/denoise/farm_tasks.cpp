@@ -269,7 +269,11 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     // read with only NaN/Inf cleaned (the choice judges that) and its other channels.
     struct ReadFrame {
         std::vector<float> cleaned, raw;
-        std::vector<float> rebuilt; // the output before the choice, for the choice's misfit test
+        // With the input among the estimators, the output before the choice (the
+        // misfit test reads it around a written frame, and a written frame's own
+        // is its output) and what making it non-negative counted.
+        std::vector<float> rebuilt;
+        NonNegativeCounts rebuilt_counts;
         PassThroughRows pass_through;
     };
     // The first mode's filter bias, from the coefficients the modes tasks kept
@@ -312,7 +316,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                                    settings.non_negative_floor);
         return result;
     };
-    const bool misfit = estimator_frame_reach(estimators) > 0;
+    const int reach = estimator_frame_reach(estimators);
     auto read_frame = [&](int t, ReadFrame& frame) {
         const bool own = context.sink.writes_frame(t);
         frame.cleaned.resize(static_cast<size_t>(samples));
@@ -325,12 +329,11 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             if (own && estimators.enabled() && !std::isfinite(frame.raw[static_cast<size_t>(patch.sample)]))
                 frame.raw[static_cast<size_t>(patch.sample)] = patch.value;
         }
-        if (misfit) { // its counts are the written frame's own, counted where it is written
+        if (reach > 0) {
             std::vector<float> unfiltered;
-            NonNegativeCounts counts;
             if (shot.output_modes == 0) // else the output is made from the filtered modes alone
                 unfiltered_of(t, unfiltered);
-            std::vector<float>& rebuilt = output_of(t, unfiltered, frame.rebuilt, counts);
+            std::vector<float>& rebuilt = output_of(t, unfiltered, frame.rebuilt, frame.rebuilt_counts);
             if (&rebuilt != &frame.rebuilt)
                 frame.rebuilt.swap(rebuilt);
         }
@@ -338,7 +341,6 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
     // The written frames a chunk at a time, with the frames around them that
     // the choice's spread reads: each frame is read once when the frames
     // written are a range, and the frames held are the chunk's and its reach.
-    const int reach = estimator_frame_reach(estimators);
     const size_t chunk = static_cast<size_t>(std::max(1, tbb::this_task_arena::max_concurrency()));
     std::map<int, ReadFrame> held; // its nodes stay put as others come and go
     tbb::enumerable_thread_specific<Buffers> thread_buffers;
@@ -364,8 +366,11 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                              rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
                              shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, shot.bias.data(),
                              buffers.sigma.data(), first_mode_term(modes.temporal, t, first_mode_bias));
-        NonNegativeCounts counts;
-        const std::vector<float>& output = output_of(t, buffers.unfiltered, buffers.output, counts);
+        // The output: made when the frame was read where the choice reads the
+        // frames around (sigma above still needed the unfiltered rebuild as it is).
+        NonNegativeCounts counts = own.rebuilt_counts;
+        const std::vector<float>& output =
+            reach > 0 ? own.rebuilt : output_of(t, buffers.unfiltered, buffers.output, counts);
         {
             std::lock_guard<std::mutex> lock(counts_mutex);
             report.non_negative += counts;

@@ -216,7 +216,7 @@ void RebuildPass::add_rows(int row, int end)
         choice_frame.noise_factor = report.frame_noise_factors[static_cast<size_t>(frame)];
         choice_frame.repeating_share = m_plan.repeating.counted_share();
         Chosen& chosen = m_chosen_of_worker.local();
-        if (spread) { // the per-pixel test's spread, from the band's rows
+        if (spread) { // the per-pixel test's spread and the misfit's statistics, from the band's rows
             SpreadWindow window;
             window.image = choice_frame.image, window.rows_begin = row;
             for (int k = 0; k < static_cast<int>(window.frames.size()); ++k) {
@@ -236,22 +236,21 @@ void RebuildPass::add_rows(int row, int end)
             choice_frame.spread = chosen.spread.data();
             choice_frame.spread_terms = chosen.spread_terms.data();
             choice_frame.spread_begin = row;
-        }
-        if (spread) { // the residual's statistics in time, from the band's rows and their rebuilds
-            MisfitWindow window;
-            window.image = choice_frame.image, window.rows_begin = row;
-            for (int k = 0; k < static_cast<int>(window.input.size()); ++k) {
+            // The residual's statistics in time, from the same rows and their rebuilds.
+            MisfitWindow misfit_window;
+            misfit_window.image = choice_frame.image, misfit_window.rows_begin = row;
+            for (int k = 0; k < static_cast<int>(misfit_window.input.size()); ++k) {
                 const int t = frame + k - kMisfitFrames;
                 if (t < 0 || t >= frames)
                     continue;
-                window.input[static_cast<size_t>(k)] = k == kMisfitFrames
-                                                           ? raw.data() + (row - raw_begin) * row_samples
-                                                           : data.data + t * data.stride + own_first;
-                window.rebuilt[static_cast<size_t>(k)] =
+                misfit_window.input[static_cast<size_t>(k)] =
+                    k == kMisfitFrames ? raw.data() + (row - raw_begin) * row_samples
+                                       : data.data + t * data.stride + own_first;
+                misfit_window.rebuilt[static_cast<size_t>(k)] =
                     output_view.data + t * output_view.frame_stride + own_offset;
             }
             chosen.misfit.resize(static_cast<size_t>(own_pixels) * kMisfitValues);
-            misfit_rows(window, row, end, chosen.misfit.data());
+            misfit_rows(misfit_window, row, end, chosen.misfit.data());
             choice_frame.misfit = chosen.misfit.data(), choice_frame.misfit_begin = row;
         }
         choice_frame.leverage = modes.leverages(frame);

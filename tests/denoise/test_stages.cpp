@@ -249,7 +249,6 @@ TEST_CASE("stages: with the estimator choice and --non-negative, and a patch the
         CAPTURE(filter);
         Settings settings;
         settings.mode_filter.enabled = filter;
-        settings.rank_rule.fixed_modes = 3;
         settings.non_negative = NonNegativeMode::Clamp;
         settings.estimators = parse_estimators("rebuild,input,spatial");
         check_same_bits(shot, settings);
