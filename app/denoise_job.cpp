@@ -510,6 +510,8 @@ DenoiseResult denoise_in_arena(const DenoiseJob& job, const CommonOptions& conte
         modes["singular_values"] = report.singular_values;
         modes["frames"] = input.frames;
         modes["temporal_modes"] = report.temporal_modes;
+        // Frame t is Σ_j ps_j σ_j pt(t, j) D_t (core/denoise/frame_weighting.h); empty: D = 1.
+        modes["frame_scales"] = report.frame_scales;
         io::write_text_file((std::filesystem::path(job.save_modes) / "temporal_modes.json").string(),
                             modes.dump(2) + "\n");
         std::string csv = "frame";

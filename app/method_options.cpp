@@ -49,6 +49,13 @@ void add_method_options(CLI::App& command, MethodOptions& options)
         "named as its renderer names them: DiffIndVar, diffuse_indirect_variance, indirectDiffuse_mse; layers "
         "apart: each layer that has its own), on, off");
     command.add_option(
+        "--frame-noise", options.frame_noise,
+        "measured (default): fit the modes to each frame's own noise level (measured from the input), so "
+        "that "
+        "a few noisy frames (a large light switched on) do not leave their noise in the clean ones; even: "
+        "count every frame as equally noisy. Measured needs the Gram solver and no --train-frames (even "
+        "there)");
+    command.add_option(
         "--estimators", options.estimators,
         "Estimators each pixel may take, comma-separated: rebuild (the temporal rebuild), input (the input "
         "as read), spatial (Gaussian blurs of the input, 1 and 2 px), nlmeans (non-local means of the input: "
@@ -140,6 +147,10 @@ denoise::Transform apply_method_options(const MethodOptions& options, bool objec
         throw usage_error(fmt::format(
             "--whiten on cannot be combined with --transform {}: the variance layer is of the untransformed values",
             options.transform));
+    if (options.frame_noise != "measured" && options.frame_noise != "even")
+        throw usage_error(
+            fmt::format("--frame-noise '{}' is not one of measured, even", options.frame_noise));
+    settings.measured_frame_noise = options.frame_noise == "measured" && options.train_frames.empty();
     if (settings.optimal_shrinkage && settings.mode_filter.enabled)
         throw usage_error(
             "--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");
@@ -258,6 +269,8 @@ nlohmann::ordered_json method_json(const TransformStream& stream, const denoise:
                              {"jumps", jumps}});
     }
     json["whiten"] = whitening_json(stream.whitening());
+    json["frame_noise"] = {{"model", report.frame_scales.empty() ? "even" : "measured"},
+                           {"scales", report.frame_scales}};
     json["weight_smoothing"] = {{"enabled", settings.weight_smoothing.enabled}, {"modes", smoothing}};
     json["estimators"] = estimators_json(settings.estimators, report, frame_numbers);
     nlohmann::ordered_json parts = nlohmann::ordered_json::array();

@@ -1,6 +1,6 @@
 // The options of `denoise` that change the method itself (issue 8): --transform,
 // --non-negative, --non-negative-mode, --shrink, --segments, --train-frames, --weight-smoothing,
-// --whiten and --estimators. Adds them to the command,
+// --whiten, --frame-noise and --estimators. Adds them to the command,
 // checks their values and combinations before any work (usage errors, exit 2),
 // puts them into the engine's settings, wraps the engine's ends in the
 // transform's decorators (core/denoise/transform.h) and writes their JSON block.
@@ -30,6 +30,7 @@ struct MethodOptions {
     bool weight_smoothing = false;    ///< --weight-smoothing (the default anyway)
     bool no_weight_smoothing = false; ///< --no-weight-smoothing
     std::string whiten = "auto"; ///< auto, on or off
+    std::string frame_noise = "measured"; ///< measured or even
     /// "auto" (every estimator where the choice can run), or comma-separated:
     /// rebuild, input, spatial
     std::string estimators = "auto";

@@ -17,6 +17,21 @@ CollectorOptions collector_options(int frames)
     return options;
 }
 
+std::vector<std::vector<double>> scaled_modes(const std::vector<std::vector<double>>& modes,
+                                              const std::vector<double>& frame_scales, bool rebuild)
+{
+    std::vector<std::vector<double>> scaled = modes;
+    if (frame_scales.empty())
+        return scaled;
+    for (std::vector<double>& mode : scaled) {
+        if (mode.size() != frame_scales.size())
+            throw internal_error("scaled_modes: a frame scale per frame is needed");
+        for (size_t t = 0; t < mode.size(); ++t)
+            mode[t] = rebuild ? mode[t] * frame_scales[t] : mode[t] / frame_scales[t];
+    }
+    return scaled;
+}
+
 ReportData gather_report(const Collector& collector, const std::vector<EngineRun>& runs,
                          const std::vector<int>& frame_numbers)
 {
@@ -32,9 +47,12 @@ ReportData gather_report(const Collector& collector, const std::vector<EngineRun
         segment.count = run.count;
         segment.singular_values = report.singular_values;
         segment.rank_decision = report.rank_decision;
-        segment.temporal_modes =
+        const std::vector<std::vector<double>>& modes =
             report.preview_temporal_modes.empty() ? report.temporal_modes : report.preview_temporal_modes;
-        segment.coefficient_images = collector.coefficient_images(run.first, segment.temporal_modes);
+        // The slider rebuilds Σ c_j D_t pt(t, j) from c_j = Σ_t x_t pt(t, j) / D_t, as the engine does.
+        segment.coefficient_images =
+            collector.coefficient_images(run.first, scaled_modes(modes, report.frame_scales, false));
+        segment.temporal_modes = scaled_modes(modes, report.frame_scales, true);
         if (run.first > 0)
             data.cuts.push_back(run.first);
         data.segments.push_back(std::move(segment));

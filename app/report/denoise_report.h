@@ -27,6 +27,13 @@ struct EngineRun {
     const denoise::Report* report = nullptr;
 };
 
+/// The engine's temporal modes [j][t] as the frames are projected on them
+/// (`rebuild` false: pt(t, j) / D_t) or rebuilt from them (true: D_t pt(t, j)),
+/// D the frame scales the modes were fitted with (denoise::Report::frame_scales,
+/// core/denoise/frame_weighting.h; empty: the modes as they are).
+std::vector<std::vector<double>> scaled_modes(const std::vector<std::vector<double>>& modes,
+                                              const std::vector<double>& frame_scales, bool rebuild);
+
 /// The page's data from the collector and the engine runs (in frame order):
 /// spectrum, rank decision and preview modes per run, shown frames, estimated
 /// error, counts and the engine's timings. Provenance (title, version, command,

@@ -1,6 +1,7 @@
 #include "core/denoise/band_rebuild.h"
 
 #include "core/common/error.h"
+#include "core/denoise/frame_weighting.h"
 #include "core/lowrank/bias_prior.h"
 #include "core/lowrank/projection.h"
 #include "core/lowrank/shrinkage.h"
@@ -15,8 +16,12 @@ constexpr double kChiSquareOneMedian = 0.45493642311957283;
 } // namespace
 
 RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& basis, int kept_modes,
-                                int surveyed, const TrainingGram* training, double noise_sigma)
+                                int surveyed, const TrainingGram* training, double noise_sigma,
+                                const Eigen::VectorXd& frame_scales)
 {
+    if (training && frame_scales.size() > 0)
+        throw internal_error(
+            "make_rebuild_basis: training frames fit modes of their own, without frame scales");
     RebuildBasis result;
     result.kept_modes = kept_modes;
     // --rank-map: pixels may use modes beyond N, up to those the filter surveyed.
@@ -24,24 +29,31 @@ RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& 
         settings.rank_map.enabled
             ? std::max(kept_modes, std::min(kept_modes + settings.rank_map.extra_modes, surveyed))
             : kept_modes;
-    // With training frames the projection (A) and the rebuild (B) differ: training.h.
+    // With training frames the projection (A) and the rebuild (B) differ:
+    // training.h. Modes fitted to X D⁻¹ are projected with D⁻¹ V and rebuilt
+    // with D V (frame_weighting.h).
+    result.frame_scales = frame_scales;
     result.temporal = training ? training->weights(basis, kept_modes)
-                               : Eigen::MatrixXd(basis.temporal.leftCols(result.rebuild_modes));
-    const bool smooth = settings.weight_smoothing.enabled; // --weight-smoothing: B smoothed, A kept
+                               : rebuild_weights(basis.temporal.leftCols(result.rebuild_modes), frame_scales);
+    // --weight-smoothing: B smoothed, A kept. B as it rebuilds the frames, D in
+    // it: smoothing D⁻¹-weighted modes and scaling back would put the noise of
+    // the measured D_t into every frame's rebuild as flicker.
+    const bool smooth = settings.weight_smoothing.enabled;
     if (smooth)
         result.temporal =
             smooth_temporal_weights(result.temporal, settings.weight_smoothing, result.weight_smoothing);
     result.temporal_rank = result.temporal.leftCols(kept_modes);
-    result.leverages = training || smooth
-                           ? training_leverages(training ? training->projector(basis, kept_modes)
-                                                         : basis.temporal.leftCols(kept_modes),
-                                                result.temporal_rank)
+    const auto projection = [&](int modes) -> Eigen::MatrixXd {
+        return training ? training->projector(basis, modes)
+                        : projection_weights(basis.temporal.leftCols(modes), frame_scales);
+    };
+    result.leverages = training || smooth || frame_scales.size() > 0
+                           ? training_leverages(projection(kept_modes), result.temporal_rank)
                            : lowrank::leverages(basis, kept_modes);
     if (settings.optimal_shrinkage)
         result.shrinkage = lowrank::optimal_shrinkage_factors(basis, noise_sigma, kept_modes);
     result.projected = settings.mode_filter.enabled ? std::max(result.rebuild_modes, surveyed) : kept_modes;
-    result.temporal_projected =
-        training ? training->projector(basis, result.projected) : basis.temporal.leftCols(result.projected);
+    result.temporal_projected = projection(result.projected);
     result.output_modes = settings.mode_filter.enabled ? result.rebuild_modes
                           : settings.optimal_shrinkage ? kept_modes
                                                        : 0;
@@ -110,7 +122,7 @@ void BandRebuilder::prepare(const Band& data, int row, int end, const lowrank::M
         {noisy.data + residual_first, rebuilt_stride, frames, noisy.frame_stride},
         {m_rebuilt.data(), rebuilt_stride, frames, rebuilt_stride}, shape, m_modes.kept_modes,
         row - residual_begin, end - residual_begin, m_confidence, m_noise_variance.data(), means,
-        means_stride);
+        means_stride, m_modes.frame_scales);
     for (size_t j = 0; j < m_modes.shrinkage.size(); ++j) // --shrink optimal, the band's own rows
         for (std::int64_t i = 0; i < valid; ++i)
             m_coefficients[j * data.rows + offset + i] *= static_cast<float>(m_modes.shrinkage[j]);
@@ -142,7 +154,8 @@ void BandRebuilder::filter(const Band& data, int row, int end, std::vector<float
     std::vector<float>& filtered = m_filtered; // filter_coefficients writes every value
     filtered.resize(static_cast<size_t>(valid) * modes);
     std::vector<float> noise_variance, features;
-    coefficient_noise_variance(noisy, surveyed, shape, m_settings.mode_filter.noise_radius, noise_variance);
+    coefficient_noise_variance(noisy, surveyed, shape, m_settings.mode_filter.noise_radius, noise_variance,
+                               m_modes.frame_scales);
     filter_coefficients(surveyed, noise_variance, shape, row - data.row_begin, end - data.row_begin, m_plan,
                         modes, {filtered.data(), valid, modes, valid}, m_gains,
                         band_features(m_filter_options, m_features, data, features));
@@ -171,9 +184,13 @@ void BandRebuilder::kept_noise_of_frame(const Eigen::MatrixXd& temporal, int t, 
     // Per mode, V_tj² times what it holds of the noise.
     thread_local std::vector<double> weights;
     weights.resize(static_cast<size_t>(modes));
+    // The gains stand for the derivative Σ_j B_tj A_tj gain_j, and B_tj A_tj =
+    // V_tj² whatever the frame scale D_t; the noise kept is B_tj² gain_j times
+    // the whitened coefficients' noise, D_t² in it.
+    const double scale = what == KeptNoise::Gain ? frame_variance(m_modes.frame_scales, t) : 1.0;
     for (int j = 0; j < modes; ++j) {
         const bool surveyed = what == KeptNoise::Noise && j < static_cast<int>(m_plan.modes.size());
-        weights[static_cast<size_t>(j)] = temporal(t, j) * temporal(t, j) *
+        weights[static_cast<size_t>(j)] = temporal(t, j) * temporal(t, j) / scale *
                                           (surveyed ? m_plan.modes[static_cast<size_t>(j)].noise_scale : 1.0);
     }
     for (std::int64_t pixel = 0; pixel < pixels; ++pixel) {

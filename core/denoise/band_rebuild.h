@@ -31,15 +31,20 @@ struct RebuildBasis {
     Eigen::MatrixXd temporal_rank;        ///< F × N of them: the unfiltered rebuild sigma's residual uses
     Eigen::MatrixXd temporal_projected;   ///< F × projected: the projection (A)
     Eigen::VectorXd leverages;            ///< h_t for sigma
+    /// D, the frame scales the modes were fitted with (frame_weighting.h; empty: even):
+    /// B = D V and A = D⁻¹ V, and frame t's noise is D_t² times the whitened s².
+    Eigen::VectorXd frame_scales;
     std::vector<double> shrinkage;        ///< --shrink optimal: η(σ_j)/σ_j per kept mode (empty: none)
     WeightSmoothingPlan weight_smoothing; ///< what --weight-smoothing did per kept mode
 };
 
 /// The matrices for N = `rank` modes of `basis`; `surveyed` modes the mode filter
 /// surveyed (0 without it), `training` the --train-frames sums (null: none),
-/// `noise_sigma` the rank rule's noise level (for --shrink optimal).
+/// `noise_sigma` the rank rule's noise level (for --shrink optimal), `frame_scales`
+/// the D the basis was fitted with (empty: even).
 RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& basis, int kept_modes,
-                                int surveyed, const TrainingGram* training, double noise_sigma);
+                                int surveyed, const TrainingGram* training, double noise_sigma,
+                                const Eigen::VectorXd& frame_scales = {});
 
 /// The mode filter's feature rows over `data`'s rows (with its halo) in
 /// `features`, or null when no feature guides it (`filter.feature_channels` 0).

@@ -88,6 +88,9 @@ struct Settings {
     /// --estimators: a per-pixel choice among the rebuild and other estimators
     /// (estimator_choice.h); none enabled: the rebuild everywhere.
     EstimatorOptions estimators;
+    /// --frame-noise: fit the modes to each frame's measured noise level
+    /// (frame_weighting.h; with the Gram solver and no training frames); false: even.
+    bool measured_frame_noise = true;
     /// Channels of each layer denoised on its own modes and N, in the order of
     /// the selected channels (layer_runs.h); empty or one layer: every channel
     /// shares the modes (--joint).
@@ -124,6 +127,9 @@ struct Report {
     std::vector<ChoiceCounts> estimator_choice;
     /// --estimators: per frame, its noise level over the shot's (frame_noise.h; empty: no choice made).
     std::vector<double> frame_noise_factors;
+    /// The frame scales D the modes were fitted with (--frame-noise measured,
+    /// frame_weighting.h); empty: even noise.
+    std::vector<double> frame_scales;
     /// The noise found to repeat from frame to frame (unmeasured: a farm task that writes no frame).
     RepeatingNoise repeating_noise;
     double seconds_filter_survey = 0;     ///< the mode filter's SURE pass

@@ -4,6 +4,7 @@
 #include "core/denoise/band_rebuild.h"
 #include "core/denoise/block_gram.h"
 #include "core/denoise/frame_noise.h"
+#include "core/denoise/frame_weighting.h"
 #include "core/denoise/stage_modes.h"
 #include "core/denoise/temporal_misfit.h"
 #include "core/denoise/temporal_spread.h"
@@ -85,7 +86,7 @@ Solved solved_from(const PassContext& context, const RunPlan& plan, const Solved
                    const SurveyRows& survey, Report& report)
 {
     const ShotShape shape = context.source.shape();
-    Solved result{solution_from_gram(context.settings, solved.gram), {}, {}};
+    Solved result{solution_from_gram(context.settings, solved.gram, solved.frame_noise_factors), {}, {}};
     report.outliers = solved.outliers;
     if (context.settings.mode_filter.enabled) {
         if (static_cast<int>(survey.sums.size()) != shape.height)
@@ -126,7 +127,8 @@ TaskResult<SolvedSums> solve_task(const PassContext& context, const Statistics& 
     // Once for the shot, here rather than in every write task (which then reads only its frames' reach).
     result.output.repeating = result.report.repeating_noise =
         measure_repeating_noise(context.source, context.progress);
-    const Solution solution = solution_from_gram(context.settings, result.output.gram);
+    const Solution solution =
+        solution_from_gram(context.settings, result.output.gram, result.output.frame_noise_factors);
     result.report.outliers = shot.outliers;
     result.report.rank_decision = solution.rank_decision;
     describe_solution(context.settings, result.report.shape, solution, solution.rank_decision.kept_modes,
@@ -141,7 +143,7 @@ TaskResult<SurveyRows> survey_task(const PassContext& context, const SolvedSums&
     TaskResult<SurveyRows> result;
     const RunPlan plan = plan_task(context, Stage::Survey, result.report, row_begin, row_end);
     const auto start = Clock::now();
-    const Solution solution = solution_from_gram(context.settings, solved.gram);
+    const Solution solution = solution_from_gram(context.settings, solved.gram, solved.frame_noise_factors);
     result.report.outliers = solved.outliers;
     result.report.rank_decision = solution.rank_decision;
     result.output.row_begin = row_begin;
@@ -214,7 +216,7 @@ TaskResult<ModeImages> modes_task(const PassContext& context, const SolvedSums& 
                                                      shape.channels};
         const std::vector<lowrank::BiasPosterior> posteriors = lowrank::row_bias_posteriors(
             residual_shape, row - residual_begin, end - residual_begin, rebuilder.confidence(),
-            rebuilder.noise_variance().data(), modes.leverages, means, band.stride);
+            rebuilder.noise_variance().data(), modes.leverages, means, band.stride, modes.frame_scales);
         images.bias.insert(images.bias.end(), posteriors.begin(), posteriors.end());
         for (int j = 0; j < images.output_modes; ++j)
             std::copy_n(rebuilder.coefficients().begin() + j * band.rows + offset, valid,
@@ -365,7 +367,8 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
         lowrank::frame_sigma(own.cleaned.data(), buffers.unfiltered.data(), image, 0, shape.height,
                              rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
                              shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, shot.bias.data(),
-                             buffers.sigma.data(), first_mode_term(modes.temporal, t, first_mode_bias));
+                             buffers.sigma.data(), first_mode_term(modes.temporal, t, first_mode_bias),
+                             frame_variance(modes.frame_scales, t));
         // The output: made when the frame was read where the choice reads the
         // frames around (sigma above still needed the unfiltered rebuild as it is).
         NonNegativeCounts counts = own.rebuilt_counts;

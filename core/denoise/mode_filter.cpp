@@ -137,9 +137,12 @@ int mode_filter_halo(const ModeFilterOptions& options)
     return widest + std::max(kernel_radius(options.guide_smoothing), options.noise_radius);
 }
 
-void coefficient_noise_variance(const BandView& noisy, const BandView& coefficients, const ImageBandShape& shape,
-                                int radius, std::vector<float>& variance)
+void coefficient_noise_variance(const BandView& noisy, const BandView& coefficients,
+                                const ImageBandShape& shape, int radius, std::vector<float>& variance,
+                                const Eigen::VectorXd& frame_scales)
 {
+    if (frame_scales.size() != 0 && frame_scales.size() != noisy.frames)
+        throw internal_error("coefficient_noise_variance: a scale per frame is needed");
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
     if (noisy.rows != row_length * shape.height || coefficients.rows != noisy.rows)
         throw internal_error("coefficient_noise_variance: band shapes do not match");
@@ -161,8 +164,14 @@ void coefficient_noise_variance(const BandView& noisy, const BandView& coefficie
         std::fill_n(energy, row_length, 0.0);
         for (int t = 0; t < noisy.frames; ++t) {
             const float* frame_row = noisy.data + t * noisy.frame_stride + y * row_length;
+            if (frame_scales.size() == 0) {
+                for (std::int64_t k = 0; k < row_length; ++k)
+                    energy[k] += static_cast<double>(frame_row[k]) * frame_row[k];
+                continue;
+            }
+            const double weight = 1.0 / (frame_scales[t] * frame_scales[t]);
             for (std::int64_t k = 0; k < row_length; ++k)
-                energy[k] += static_cast<double>(frame_row[k]) * frame_row[k];
+                energy[k] += static_cast<double>(frame_row[k]) * frame_row[k] * weight;
         }
         for (int j = 0; j < coefficients.frames; ++j) {
             const float* mode_row = coefficients.data + j * coefficients.frame_stride + y * row_length;

@@ -131,9 +131,12 @@ int mode_filter_halo(const ModeFilterOptions& options);
 /// Writes the noise variance v of every sample of a band (all its rows) into
 /// `variance`: the energy left by the first K = coefficients.frames modes per
 /// degree of freedom, pooled over the (2·radius+1)² window clipped to the band.
-/// Needs K < noisy.frames. Throws modestack::Error (internal) on mismatched shapes.
+/// With `frame_scales` D (coefficients projected with D⁻¹ V, frame_weighting.h)
+/// the energy is that of x_t / D_t. Needs K < noisy.frames. Throws
+/// modestack::Error (internal) on mismatched shapes.
 void coefficient_noise_variance(const lowrank::BandView& noisy, const lowrank::BandView& coefficients,
-                                const lowrank::ImageBandShape& shape, int radius, std::vector<float>& variance);
+                                const lowrank::ImageBandShape& shape, int radius,
+                                std::vector<float>& variance, const Eigen::VectorXd& frame_scales = {});
 
 /// Accumulates SURE of every candidate and mode over the shot, band by band.
 class SureSurvey {

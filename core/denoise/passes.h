@@ -62,6 +62,8 @@ struct Solution {
     lowrank::RankDecision rank_decision;
     std::optional<TrainingGram> training; ///< --train-frames: the projection and the rebuild differ
     double seconds = 0;                   ///< the eigensolve or randomized SVD
+    /// D, each frame's noise level the modes were fitted with (frame_weighting.h); empty: even.
+    Eigen::VectorXd frame_scales;
 };
 
 /// The mode filter's choice: a filter per mode and N (its SURE choice for auto
@@ -78,8 +80,9 @@ public:
     GramPass(const Settings& settings, const ShotShape& shape);
     /// Adds a band of a pass over the shot (ShotStream::BandPass), in row order.
     void add(Band& band);
-    /// The modes and N from every band's sums.
-    Solution finish();
+    /// The modes and N from every band's sums and each frame's noise factor
+    /// (frame_noise.h, the pass's first read).
+    Solution finish(const std::vector<double>& noise_factors);
 
 private:
     const Settings& m_settings;
@@ -93,8 +96,9 @@ private:
 Solution gram_solution(const PassContext& context, ShotStream& stream);
 /// The randomized SVD's passes over the shot and the solve.
 Solution randomized_solution(const PassContext& context, ShotStream& stream);
-/// The solve from merged Gram sums (a farm's solve and later tasks).
-Solution solution_from_gram(const Settings& settings, const lowrank::GramAccumulator& gram);
+/// The solve from merged Gram sums and the frames' noise factors (a farm's solve and later tasks).
+Solution solution_from_gram(const Settings& settings, const lowrank::GramAccumulator& gram,
+                            const std::vector<double>& noise_factors);
 
 /// Pass 1 of a farm statistics task: rows [row_begin, row_end), each block's sums kept apart.
 Statistics block_statistics(const PassContext& context, ShotStream& stream, int row_begin, int row_end);
@@ -122,7 +126,8 @@ private:
     bool m_task;
     int m_row_begin, m_row_end;
     int m_modes;
-    Eigen::MatrixXd m_temporal;
+    Eigen::MatrixXd m_temporal;     // the projection A
+    Eigen::VectorXd m_frame_scales; // D (empty: even)
     SureSurvey m_survey;
     Band m_band;
     std::vector<float> m_coefficients, m_noise_variance, m_features;

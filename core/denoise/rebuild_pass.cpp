@@ -5,6 +5,7 @@
 // chosen_modes, which every rebuild starts from (a farm's modes and write
 // tasks too), and choose_frame_rows, which a farm's write task shares, live
 // here beside it.
+#include "core/denoise/frame_weighting.h"
 #include "core/denoise/passes.h"
 #include "core/denoise/temporal_misfit.h"
 #include "core/denoise/temporal_spread.h"
@@ -43,7 +44,7 @@ RebuildBasis chosen_modes(const Settings& settings, const ShotShape& shape, cons
     describe_solution(settings, shape, solution, survey.rank_decision.kept_modes, report);
     RebuildBasis modes = make_rebuild_basis(settings, solution.basis, survey.rank_decision.kept_modes,
                                             survey.modes, solution.training ? &*solution.training : nullptr,
-                                            survey.rank_decision.noise_sigma);
+                                            survey.rank_decision.noise_sigma, solution.frame_scales);
     report.shrinkage = modes.shrinkage;
     report.rebuild_weights.assign(static_cast<size_t>(modes.temporal.cols()),
                                   std::vector<double>(static_cast<size_t>(modes.temporal.rows())));
@@ -51,6 +52,8 @@ RebuildBasis chosen_modes(const Settings& settings, const ShotShape& shape, cons
         for (Eigen::Index t = 0; t < modes.temporal.rows(); ++t)
             report.rebuild_weights[static_cast<size_t>(j)][static_cast<size_t>(t)] = modes.temporal(t, j);
     report.weight_smoothing = modes.weight_smoothing;
+    report.frame_scales.assign(modes.frame_scales.data(),
+                               modes.frame_scales.data() + modes.frame_scales.size());
     return modes;
 }
 
@@ -139,9 +142,9 @@ void RebuildPass::add_rows(int row, int end)
                                       kept_noise.data(), what);
     };
     // Each row's bias prior from all its frames' means, before any frame's sigma.
-    const std::vector<lowrank::BiasPosterior> posteriors =
-        lowrank::row_bias_posteriors(residual_shape, first_valid, last_valid, rebuilder.confidence(),
-                                     rebuilder.noise_variance().data(), modes.leverages, sigma, sigma_stride);
+    const std::vector<lowrank::BiasPosterior> posteriors = lowrank::row_bias_posteriors(
+        residual_shape, first_valid, last_valid, rebuilder.confidence(), rebuilder.noise_variance().data(),
+        modes.leverages, sigma, sigma_stride, modes.frame_scales);
     tbb::parallel_for(0, frames, [&](int t) {
         std::vector<float>& kept_noise = m_kept_noise_of_worker.local(); // nothing below runs in parallel
         if (filter)
@@ -150,7 +153,8 @@ void RebuildPass::add_rows(int row, int end)
                                  rebuilder.noise_variance().data(), modes.leverages(t),
                                  filter ? kept_noise.data() : nullptr, posteriors.data(),
                                  sigma + t * sigma_stride,
-                                 first_mode_term(modes.temporal, t, rebuilder.first_mode_bias()));
+                                 first_mode_term(modes.temporal, t, rebuilder.first_mode_bias()),
+                                 frame_variance(modes.frame_scales, t));
     });
     lowrank::MutableBandView output_view{rebuilder.rebuilt().data() + (first - residual_begin) * row_samples,
                                          valid, frames, rebuilt_stride};

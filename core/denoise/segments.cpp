@@ -202,6 +202,8 @@ Report merge_reports(const std::vector<Report>& reports)
                                        part.estimator_choice.end());
         merged.frame_noise_factors.insert(merged.frame_noise_factors.end(), part.frame_noise_factors.begin(),
                                           part.frame_noise_factors.end()); // each over its own segment
+        merged.frame_scales.insert(merged.frame_scales.end(), part.frame_scales.begin(),
+                                   part.frame_scales.end()); // each over its own segment
         if (part.repeating_noise.repeats && !merged.repeating_noise.repeats)
             merged.repeating_noise = part.repeating_noise; // said of the shot when any part has it
         merged.seconds_filter_survey += part.seconds_filter_survey;

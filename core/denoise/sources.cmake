@@ -5,6 +5,7 @@ target_sources(modestack_core PRIVATE
   ${CMAKE_CURRENT_LIST_DIR}/estimator_choice.cpp
   ${CMAKE_CURRENT_LIST_DIR}/feature_guide.cpp
   ${CMAKE_CURRENT_LIST_DIR}/frame_noise.cpp
+  ${CMAKE_CURRENT_LIST_DIR}/frame_weighting.cpp
   ${CMAKE_CURRENT_LIST_DIR}/filter_weights.cpp
   ${CMAKE_CURRENT_LIST_DIR}/guided_filter.cpp
   ${CMAKE_CURRENT_LIST_DIR}/mode_filter.cpp

@@ -4,6 +4,7 @@
 #include "core/denoise/passes.h"
 
 #include "core/denoise/block_gram.h"
+#include "core/denoise/frame_weighting.h"
 #include "core/lowrank/gram.h"
 
 #include <fmt/format.h>
@@ -58,13 +59,25 @@ void visit_whitened(const Settings& settings, const ShotShape& shape, const Band
     }
 }
 
-// The basis and N of a solve, with the solve's seconds.
+// The basis and N of a solve, with the solve's seconds and the frame scales it used.
 Solution solved(lowrank::Basis basis, const Settings& settings, std::optional<TrainingGram> training,
-                double seconds)
+                double seconds, Eigen::VectorXd frame_scales = {})
 {
-    Solution solution{std::move(basis), {}, std::move(training), seconds};
+    Solution solution{std::move(basis), {}, std::move(training), seconds, std::move(frame_scales)};
     solution.rank_decision = lowrank::choose_rank(solution.basis, settings.rank_rule);
     return solution;
+}
+
+// The Gram route's solve: the modes of X D⁻¹ with the measured frame scales
+// (frame_weighting.h), of X with --frame-noise even.
+Solution solved_gram(const Settings& settings, const lowrank::GramAccumulator& gram,
+                     const std::vector<double>& noise_factors)
+{
+    const auto start = Clock::now();
+    Eigen::VectorXd scales = settings.measured_frame_noise ? frame_scales(noise_factors) : Eigen::VectorXd();
+    lowrank::Basis basis = lowrank::basis_from_gram(scaled_gram(gram, scales));
+    basis.passes = 1;
+    return solved(std::move(basis), settings, std::nullopt, seconds_since(start), std::move(scales));
 }
 
 } // namespace
@@ -85,11 +98,13 @@ void GramPass::add(Band& band)
     });
 }
 
-Solution GramPass::finish()
+Solution GramPass::finish(const std::vector<double>& noise_factors)
 {
     m_gram.finish();
+    if (!m_training)
+        return solved_gram(m_settings, m_gram.total(), noise_factors);
     const auto start = Clock::now();
-    lowrank::Basis basis = m_training ? m_training->basis() : lowrank::basis_from_gram(m_gram.total());
+    lowrank::Basis basis = m_training->basis();
     basis.passes = 1;
     return solved(std::move(basis), m_settings, std::move(m_training), seconds_since(start));
 }
@@ -98,7 +113,7 @@ Solution gram_solution(const PassContext& context, ShotStream& stream)
 {
     GramPass gram(context.settings, stream.shape());
     stream.for_each_band([&](Band& band) { gram.add(band); });
-    return gram.finish();
+    return gram.finish(stream.frame_noise_factors());
 }
 
 Solution randomized_solution(const PassContext& context, ShotStream& stream)
@@ -122,12 +137,10 @@ Solution randomized_solution(const PassContext& context, ShotStream& stream)
     return solved(std::move(basis), settings, std::nullopt, 0);
 }
 
-Solution solution_from_gram(const Settings& settings, const lowrank::GramAccumulator& gram)
+Solution solution_from_gram(const Settings& settings, const lowrank::GramAccumulator& gram,
+                            const std::vector<double>& noise_factors)
 {
-    const auto start = Clock::now();
-    lowrank::Basis basis = lowrank::basis_from_gram(gram);
-    basis.passes = 1;
-    return solved(std::move(basis), settings, std::nullopt, seconds_since(start));
+    return solved_gram(settings, gram, noise_factors);
 }
 
 Statistics block_statistics(const PassContext& context, ShotStream& stream, int row_begin, int row_end)

@@ -3,6 +3,7 @@
 // mode and of N that follows from all rows' sums.
 #include "core/denoise/passes.h"
 
+#include "core/denoise/frame_weighting.h"
 #include "core/lowrank/projection.h"
 
 #include <fmt/format.h>
@@ -24,7 +25,8 @@ SurveyPass::SurveyPass(const PassContext& context, ShotStream& stream, const Run
                        const Solution& solution, int row_begin, int row_end, bool task)
     : m_context(context), m_stream(stream), m_plan(plan), m_task(task), m_row_begin(row_begin),
       m_row_end(row_end), m_modes(survey_modes(context.settings, stream.shape(), solution.basis)),
-      m_temporal(solution.basis.temporal.leftCols(m_modes)),
+      m_temporal(projection_weights(solution.basis.temporal.leftCols(m_modes), solution.frame_scales)),
+      m_frame_scales(solution.frame_scales),
       m_survey(plan.filter, stream.shape().width, stream.shape().height, stream.shape().channels, m_modes)
 {
     if (!task)
@@ -45,7 +47,7 @@ void SurveyPass::add_rows(int row, int end)
     lowrank::project_coefficients(noisy, m_temporal, coefficient_view);
     lowrank::ImageBandShape band_shape{shape.width, data.row_end - data.row_begin, shape.channels};
     coefficient_noise_variance(noisy, coefficient_view.view(), band_shape,
-                               m_context.settings.mode_filter.noise_radius, m_noise_variance);
+                               m_context.settings.mode_filter.noise_radius, m_noise_variance, m_frame_scales);
     m_survey.add_band(
         coefficient_view.view(), m_noise_variance, band_shape, data.row_begin, row - data.row_begin,
         end - data.row_begin,

@@ -226,12 +226,15 @@ double window_size(const ImageBandShape& shape, int radius, int x, int y)
 
 void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
                              int kept_modes, int valid_y0, int valid_y1, const ConfidenceOptions& options,
-                             float* noise_variance, float* means, std::int64_t means_stride)
+                             float* noise_variance, float* means, std::int64_t means_stride,
+                             const Eigen::VectorXd& frame_scales)
 {
     check_band(noisy, rebuilt, shape, valid_y0, valid_y1, options.radius);
     const int frames = noisy.frames;
     if (kept_modes < 0 || kept_modes >= frames)
         throw internal_error("confidence: rank must be less than the number of frames");
+    if (frame_scales.size() != 0 && frame_scales.size() != frames)
+        throw internal_error("residual_noise_variance: a scale per frame is needed");
     const std::int64_t samples = static_cast<std::int64_t>(shape.width) * shape.channels * (valid_y1 - valid_y0);
     if (samples == 0)
         return;
@@ -263,8 +266,14 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
         for_each_tile(samples, [&](std::int64_t row0, std::int64_t count) {
             for (int t = group; t < group_end; ++t) {
                 const float* power = noise_power.data() + (t - group) * samples;
+                if (frame_scales.size() == 0) {
+                    for (std::int64_t i = row0; i < row0 + count; ++i)
+                        energy[static_cast<std::size_t>(i)] += power[i];
+                    continue;
+                }
+                const double weight = 1.0 / (frame_scales(t) * frame_scales(t)); // the residual r_t / D_t
                 for (std::int64_t i = row0; i < row0 + count; ++i)
-                    energy[static_cast<std::size_t>(i)] += power[i];
+                    energy[static_cast<std::size_t>(i)] += power[i] * weight;
             }
         });
     }
@@ -276,14 +285,14 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
 void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape,
                  int valid_y0, int valid_y1, const ConfidenceOptions& options, const float* noise_variance,
                  double leverage, const float* kept_noise, const BiasPosterior* posteriors, float* sigma,
-                 SigmaExtraTerm extra)
+                 SigmaExtraTerm extra, double frame_variance)
 {
     if (valid_y0 < 0 || valid_y1 > shape.height || valid_y0 > valid_y1 || options.radius < 0)
         throw internal_error("frame_sigma: output rows outside the band");
     ResidualWindows windows(shape, options.radius, valid_y0, valid_y1);
     windows.compute(noisy_frame, rebuilt_frame, sigma, nullptr);
     sigma_from_mean(shape, valid_y0, valid_y1, options, noise_variance, leverage, kept_noise, posteriors,
-                    sigma, extra);
+                    sigma, extra, frame_variance);
 }
 
 namespace {
@@ -293,10 +302,13 @@ namespace {
 // noise_share · s² is the noise variance τ² of their windowed mean.
 template <typename Visit>
 void for_each_window_run(const ImageBandShape& shape, int valid_y0, int valid_y1,
-                         const ConfidenceOptions& options, double leverage, Visit&& visit)
+                         const ConfidenceOptions& options, double leverage, double frame_variance,
+                         Visit&& visit)
 {
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
-    const auto share = [&](double window) { return options.bias_significance * (1.0 - leverage) / window; };
+    const auto share = [&](double window) {
+        return options.bias_significance * (1.0 - leverage) / window * frame_variance;
+    };
     for (int y = valid_y0; y < valid_y1; ++y) {
         const std::int64_t row = (y - valid_y0) * row_length;
         for_each_window_shape(
@@ -317,10 +329,10 @@ void for_each_window_run(const ImageBandShape& shape, int valid_y0, int valid_y1
 
 void count_bias_ratios(const ImageBandShape& shape, int valid_y0, int valid_y1,
                        const ConfidenceOptions& options, const float* noise_variance, double leverage,
-                       const float* means, BiasRatioCounts* counts)
+                       const float* means, BiasRatioCounts* counts, double frame_variance)
 {
     for_each_window_run(
-        shape, valid_y0, valid_y1, options, leverage,
+        shape, valid_y0, valid_y1, options, leverage, frame_variance,
         [&](int y, std::int64_t first, std::int64_t last, double noise_share) {
             BiasRatioCounts& row = counts[y - valid_y0];
             for (std::int64_t i = first; i < last; ++i) {
@@ -333,8 +345,10 @@ void count_bias_ratios(const ImageBandShape& shape, int valid_y0, int valid_y1,
 std::vector<BiasPosterior> row_bias_posteriors(const ImageBandShape& shape, int valid_y0, int valid_y1,
                                                const ConfidenceOptions& options, const float* noise_variance,
                                                const Eigen::VectorXd& leverages, const float* means,
-                                               std::int64_t means_stride)
+                                               std::int64_t means_stride, const Eigen::VectorXd& frame_scales)
 {
+    if (frame_scales.size() != 0 && frame_scales.size() != leverages.size())
+        throw internal_error("row_bias_posteriors: a scale per frame is needed");
     const int rows = valid_y1 - valid_y0;
     const std::int64_t row_length = static_cast<std::int64_t>(shape.width) * shape.channels;
     std::vector<BiasPosterior> posteriors(static_cast<std::size_t>(std::max(rows, 0)));
@@ -343,7 +357,8 @@ std::vector<BiasPosterior> row_bias_posteriors(const ImageBandShape& shape, int 
         const std::int64_t offset = r * row_length;
         for (Eigen::Index t = 0; t < leverages.size(); ++t)
             count_bias_ratios(shape, valid_y0 + r, valid_y0 + r + 1, options, noise_variance + offset,
-                              leverages(t), means + t * means_stride + offset, &counts);
+                              leverages(t), means + t * means_stride + offset, &counts,
+                              frame_scales.size() == 0 ? 1.0 : frame_scales(t) * frame_scales(t));
         posteriors[static_cast<std::size_t>(r)] = fit_bias_posterior(counts);
     });
     return posteriors;
@@ -352,11 +367,11 @@ std::vector<BiasPosterior> row_bias_posteriors(const ImageBandShape& shape, int 
 void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1,
                      const ConfidenceOptions& options, const float* noise_variance, double leverage,
                      const float* kept_noise, const BiasPosterior* posteriors, float* sigma,
-                     SigmaExtraTerm extra)
+                     SigmaExtraTerm extra, double frame_variance)
 {
-    // The windowed mean of pure noise has variance τ² = s²(1 − h_t)/|W|; the
-    // bias is the posterior mean of b² under the row's prior (bias_prior.h).
-    for_each_window_run(shape, valid_y0, valid_y1, options, leverage,
+    // The windowed mean of pure noise has variance τ² = f_t s²(1 − h_t)/|W|;
+    // the bias is the posterior mean of b² under the row's prior (bias_prior.h).
+    for_each_window_run(shape, valid_y0, valid_y1, options, leverage, frame_variance,
                         [&](int y, std::int64_t first, std::int64_t last, double noise_share) {
                             const BiasPosterior& posterior = posteriors[y - valid_y0];
                             for (std::int64_t i = first; i < last; ++i) {
@@ -366,8 +381,8 @@ void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1,
                                 // τ² = 0 (no noise) lands in the top bin, slope 1: the bias is μ².
                                 const double bias =
                                     posterior.slope[bin] * squared + posterior.offset[bin] * null;
-                                const double kept =
-                                    kept_noise ? static_cast<double>(kept_noise[i]) : leverage;
+                                const double kept = kept_noise ? static_cast<double>(kept_noise[i])
+                                                               : leverage * frame_variance;
                                 const double further =
                                     extra.values ? extra.weight * static_cast<double>(extra.values[i]) : 0.0;
                                 sigma[i] = static_cast<float>(std::sqrt(variance * kept + bias + further));

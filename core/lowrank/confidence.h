@@ -79,10 +79,14 @@ void confidence_band(const BandView& noisy, const BandView& rebuilt, const Image
 /// residual mean, the first half of frame_sigma's work, so that a whole run reads
 /// every residual once and finishes with sigma_from_mean. `means` may be the
 /// output rows of `noisy` itself: a frame's noisy values are all read before its
-/// mean is written (a streamed band needs no other buffer for sigma) ...
+/// mean is written (a streamed band needs no other buffer for sigma). With
+/// `frame_scales` D (modes fitted to frames of uneven noise,
+/// denoise/frame_weighting.h) s² is that of the whitened residual r_t / D_t,
+/// and frame t's noise variance is D_t² s² below ...
 void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, const ImageBandShape& shape,
                              int kept_modes, int valid_y0, int valid_y1, const ConfidenceOptions& options,
-                             float* noise_variance, float* means = nullptr, std::int64_t means_stride = 0);
+                             float* noise_variance, float* means = nullptr, std::int64_t means_stride = 0,
+                             const Eigen::VectorXd& frame_scales = {});
 
 /// ... the bias prior of each output row from every frame's windowed residual
 /// mean (frame t's output rows at means + t · means_stride, `leverages` h_t
@@ -90,13 +94,15 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
 std::vector<BiasPosterior> row_bias_posteriors(const ImageBandShape& shape, int valid_y0, int valid_y1,
                                                const ConfidenceOptions& options, const float* noise_variance,
                                                const Eigen::VectorXd& leverages, const float* means,
-                                               std::int64_t means_stride);
+                                               std::int64_t means_stride,
+                                               const Eigen::VectorXd& frame_scales = {});
 
 /// ... (its counting step: adds the bins of t² = μ²/τ² of one frame's output rows to
-/// counts[y − valid_y0], for a caller that holds its frames one at a time) ...
+/// counts[y − valid_y0], for a caller that holds its frames one at a time;
+/// `frame_variance` the frame's D_t²) ...
 void count_bias_ratios(const ImageBandShape& shape, int valid_y0, int valid_y1,
                        const ConfidenceOptions& options, const float* noise_variance, double leverage,
-                       const float* means, BiasRatioCounts* counts);
+                       const float* means, BiasRatioCounts* counts, double frame_variance = 1.0);
 
 /// A further term of sigma², per output sample, times a factor of the frame:
 /// the mode filter's bias of the first mode times B_t1²
@@ -108,18 +114,19 @@ struct SigmaExtraTerm {
 
 /// ... and sigma of one frame from its noisy and rebuilt values (whole band in
 /// `shape`), s², the frame's leverage h_t, or its kept noise per sample
-/// (null: h_t), the output rows' posteriors and any further term. `sigma`
-/// receives the output rows.
+/// (null: h_t), the output rows' posteriors and any further term, and the
+/// frame's noise variance over s² (D_t², which a kept noise already holds).
+/// `sigma` receives the output rows.
 void frame_sigma(const float* noisy_frame, const float* rebuilt_frame, const ImageBandShape& shape,
                  int valid_y0, int valid_y1, const ConfidenceOptions& options, const float* noise_variance,
                  double leverage, const float* kept_noise, const BiasPosterior* posteriors, float* sigma,
-                 SigmaExtraTerm extra = {});
+                 SigmaExtraTerm extra = {}, double frame_variance = 1.0);
 
 /// frame_sigma's second half: `sigma` holds the frame's windowed residual
 /// mean of the output rows on entry (from residual_noise_variance) and its sigma on return.
 void sigma_from_mean(const ImageBandShape& shape, int valid_y0, int valid_y1,
                      const ConfidenceOptions& options, const float* noise_variance, double leverage,
                      const float* kept_noise, const BiasPosterior* posteriors, float* sigma,
-                     SigmaExtraTerm extra = {});
+                     SigmaExtraTerm extra = {}, double frame_variance = 1.0);
 
 } // namespace modestack::lowrank

@@ -3,6 +3,7 @@
 // reads it, its coefficient images rebuild an exactly low-rank shot from the
 // engine's temporal modes (the rank slider's math), and its error estimate is
 // σ² / (value² + 0.01).
+#include "app/report/denoise_report.h"
 #include "app/report/report_collector.h"
 #include "core/common/progress.h"
 #include "core/denoise/engine.h"
@@ -127,7 +128,11 @@ TEST_CASE("coefficient images and the engine's preview modes rebuild an exactly 
                 dot += report.preview_temporal_modes[j][t] * report.preview_temporal_modes[k][t];
             CHECK(dot == doctest::Approx(j == k ? 1.0 : 0.0).epsilon(1e-9));
         }
-    std::vector<LinearImage> images = collector.coefficient_images(0, report.preview_temporal_modes);
+    // Fitted to each frame's measured noise: projected on pt / D, rebuilt from D pt.
+    REQUIRE(report.frame_scales.size() == static_cast<size_t>(frames));
+    std::vector<LinearImage> images = collector.coefficient_images(
+        0, scaled_modes(report.preview_temporal_modes, report.frame_scales, false));
+    const auto rebuild = scaled_modes(report.preview_temporal_modes, report.frame_scales, true);
     double worst = 0, largest = 0;
     for (int t = 0; t < frames; ++t)
         for (int y = 0; y < height; ++y)
@@ -136,7 +141,7 @@ TEST_CASE("coefficient images and the engine's preview modes rebuild an exactly 
                     size_t at = (static_cast<size_t>(y) * width + x) * 3 + c;
                     double rebuilt = 0;
                     for (int j = 0; j < 2; ++j)
-                        rebuilt += images[j].rgb[at] * report.preview_temporal_modes[j][t];
+                        rebuilt += images[j].rgb[at] * rebuild[j][t];
                     worst = std::max(worst, std::abs(rebuilt - source.value(t, x, y, c)));
                     largest = std::max(largest, std::abs(static_cast<double>(source.value(t, x, y, c))));
                 }
