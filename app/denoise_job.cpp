@@ -517,11 +517,14 @@ DenoiseResult denoise_in_arena(const DenoiseJob& job, const CommonOptions& conte
         std::string csv = "frame";
         for (size_t j = 0; j < report.temporal_modes.size(); ++j)
             csv += fmt::format(",mode{}", j + 1);
-        csv += "\n";
+        const bool scaled = !report.frame_scales.empty();
+        csv += scaled ? ",frame_scale\n" : "\n";
         for (size_t t = 0; t < input.frames.size(); ++t) {
             csv += std::to_string(input.frames[t]);
             for (const auto& mode : report.temporal_modes)
                 csv += fmt::format(",{:.9g}", mode[t]);
+            if (scaled)
+                csv += fmt::format(",{:.9g}", report.frame_scales[t]);
             csv += "\n";
         }
         io::write_text_file((std::filesystem::path(job.save_modes) / "temporal_modes.csv").string(), csv);

@@ -139,6 +139,8 @@ nlohmann::ordered_json denoise_json(const DenoiseResult& result)
         const denoise::Report& own = !result.joint && i < report.layers.size() ? report.layers[i] : report;
         if (!own.frame_noise_factors.empty())
             entry["frame_noise_factors"] = own.frame_noise_factors;
+        // The frame scales its modes were fitted with (core/denoise/frame_weighting.h; empty: even).
+        entry["frame_scales"] = own.frame_scales;
         // Noise that repeats from frame to frame (core/denoise/repeating_noise.h).
         if (const denoise::RepeatingNoise& noise = own.repeating_noise; noise.measured)
             entry["repeating_noise"] = {

@@ -17,8 +17,9 @@ static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "stage files hold littl
 
 // The first line of every stage file. Its number changes with the layout: 2 added
 // the input's roughness (statistics) and each frame's noise factor (solve).
-// 3: survey rows count each mode's high-pass ratios; 4: modes files hold each row's bias posterior.
-constexpr const char* kMagic = "modestack stage file 4";
+// 3: survey rows count each mode's high-pass ratios; 4: modes files hold each row's bias posterior;
+// 5: the survey and modes are of the modes fitted to each frame's measured noise (frame_weighting.h).
+constexpr const char* kMagic = "modestack stage file 5";
 constexpr const char* kMagicPrefix = "modestack stage file ";
 
 // Throws a one-line error unless `line` is this version's first line.

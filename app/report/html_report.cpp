@@ -76,7 +76,7 @@ std::string temporal_plot(const ReportData& data)
 {
     PlotSpec spec;
     spec.id = "temporal-plot";
-    spec.title = "Temporal weights pt(t, j) of the first modes";
+    spec.title = "Temporal weights D_t pt(t, j) of the first modes";
     spec.x_label = "frame";
     spec.y_label = "weight";
     const std::vector<double> frames = frame_axis(data);
@@ -208,15 +208,19 @@ std::string render_html(const ReportData& data)
     html += "<h2>Temporal weights</h2>\n<div id=\"temporal\">" + temporal_plot(data) + "</div>\n";
     if (!data.cuts.empty())
         html += "<p class=\"note\">Red dashed lines: segment cuts (each part has its own modes).</p>\n";
-    html += "<h2>Spatial modes</h2>\n<p class=\"note\">Coefficient images c_j = &Sigma;_t X(t) pt(t, j) of the "
-            "downsampled noisy frames (each scaled to its own range; grey = 0 only by chance).</p>\n"
-            "<div id=\"modes\" class=\"row modes\"></div>\n";
+    html +=
+        "<h2>Spatial modes</h2>\n<p class=\"note\">Coefficient images c_j = &Sigma;_t X(t) pt(t, j) / D_t of "
+        "the downsampled noisy frames, D_t each frame's measured noise scale (1 with --frame-noise even; "
+        "each image scaled to its own range; grey = 0 only by chance).</p>\n"
+        "<div id=\"modes\" class=\"row modes\"></div>\n";
 
     html += "<h2>Rank slider</h2>\n";
-    html += fmt::format("<p class=\"note\">The rebuild &Sigma;<sub>j&lt;n</sub> c<sub>j</sub> pt(t, j) computed in the "
-                        "page at {} from the unfiltered modes (no mode filter, no firefly clamp, 8-bit "
-                        "quantized coefficient images): a preview of what N changes, not the denoised output.</p>\n",
-                        resolution_text(data.preview_factor));
+    html += fmt::format(
+        "<p class=\"note\">The rebuild &Sigma;<sub>j&lt;n</sub> c<sub>j</sub> D<sub>t</sub> pt(t, j) "
+        "computed in the "
+        "page at {} from the unfiltered modes (no mode filter, no firefly clamp, 8-bit "
+        "quantized coefficient images): a preview of what N changes, not the denoised output.</p>\n",
+        resolution_text(data.preview_factor));
     html += "<div class=\"controls\"><select id=\"rank-frame\"></select> <input id=\"rank-slider\" type=\"range\" "
             "min=\"1\" max=\"1\" step=\"1\" value=\"1\"> <span id=\"rank-value\"></span></div>\n"
             "<canvas id=\"rank-canvas\" width=\"1\" height=\"1\"></canvas>\n";

@@ -57,9 +57,12 @@ const float* band_features(const ModeFilterOptions& filter, const FeatureGuide* 
 /// measures that as each mode's noise scale (mode_filter.h). Sigma counts it.
 /// The choice's SURE needs the rebuild's derivative at the sample, which the
 /// noise a mode holds does not change: it takes the gains alone.
+/// With frame scales D (B = D V, frame_weighting.h) the derivative's B_tj A_tj
+/// is V_tj² = (B_tj / D_t)² (smoothed B: its stand-in, as without D), and the
+/// noise kept is B_tj² times the whitened noise: D_t² in it.
 enum class KeptNoise {
-    Gain,  ///< Σ_j V_tj² · gain_j(p): SURE's stand-in for the rebuild's derivative
-    Noise, ///< Σ_j V_tj² · gain_j(p) · noise_scale_j: the noise kept, for sigma
+    Gain,  ///< Σ_j (B_tj / D_t)² · gain_j(p): SURE's stand-in for the rebuild's derivative
+    Noise, ///< Σ_j B_tj² · gain_j(p) · noise_scale_j: the noise kept, over the whitened s², for sigma
 };
 
 /// Pass 2 up to the frames for one band at a time; its buffers are reused from

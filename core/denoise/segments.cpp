@@ -202,14 +202,26 @@ Report merge_reports(const std::vector<Report>& reports)
                                        part.estimator_choice.end());
         merged.frame_noise_factors.insert(merged.frame_noise_factors.end(), part.frame_noise_factors.begin(),
                                           part.frame_noise_factors.end()); // each over its own segment
-        merged.frame_scales.insert(merged.frame_scales.end(), part.frame_scales.begin(),
-                                   part.frame_scales.end()); // each over its own segment
         if (part.repeating_noise.repeats && !merged.repeating_noise.repeats)
             merged.repeating_noise = part.repeating_noise; // said of the shot when any part has it
         merged.seconds_filter_survey += part.seconds_filter_survey;
         merged.seconds_statistics += part.seconds_statistics;
         merged.seconds_solve += part.seconds_solve;
         merged.seconds_rebuild += part.seconds_rebuild;
+    }
+    // Each part's frame scales over its own frames; a part fitted to even noise
+    // (the randomized SVD) counts 1 in each of its frames. None anywhere: even.
+    merged.frame_scales.clear();
+    const bool measured = std::any_of(reports.begin(), reports.end(),
+                                      [](const Report& part) { return !part.frame_scales.empty(); });
+    for (size_t k = 0; measured && k < reports.size(); ++k) {
+        const Report& part = reports[k];
+        if (part.frame_scales.empty())
+            merged.frame_scales.insert(merged.frame_scales.end(), static_cast<size_t>(part.shape.frames),
+                                       1.0);
+        else
+            merged.frame_scales.insert(merged.frame_scales.end(), part.frame_scales.begin(),
+                                       part.frame_scales.end());
     }
     return merged;
 }

@@ -87,6 +87,10 @@ PointDenoise denoise_points(denoise::FrameSource& points, denoise::Settings sett
     settings.feature_guide.kinds.clear();
     settings.rank_map.enabled = false;
     settings.sigma_radius = 0;
+    // Nor a frame noise measured along a point image's rows (its horizontal
+    // high-pass is of unrelated points), which the surface filter's noise
+    // model would not count either.
+    settings.measured_frame_noise = false;
     const bool over_surfaces = samples.count() > 0 && samples.spacing > 0;
     const std::int64_t matrix_bytes = static_cast<std::int64_t>(shape.width) * shape.height * shape.channels *
                                       shape.frames * static_cast<std::int64_t>(sizeof(float));

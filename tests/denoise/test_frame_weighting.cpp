@@ -2,10 +2,12 @@
 // Gram sums of X D⁻¹ are those of the scaled frames, a rank-N shot comes back
 // exactly through A = D⁻¹ V and B = D V, the scales are floored, and through
 // the engine a noise-free shot of rank 3 whose frames differ in brightness
-// (so in roughness, and the scales are far from 1) is still recovered exactly.
+// (so in roughness, and the scales are far from 1) is still recovered exactly,
+// and merged parts' scales line up with the shot's frames.
 #include "core/common/error.h"
 #include "core/denoise/engine.h"
 #include "core/denoise/frame_weighting.h"
+#include "core/denoise/segments.h"
 #include "core/lowrank/basis.h"
 #include "tests/denoise/memory_shot.h"
 
@@ -145,4 +147,17 @@ TEST_CASE("frame weighting: through the engine, a noise-free rank-3 shot with fr
             error += e * e, energy += truth * truth;
         }
     CHECK(std::sqrt(error / energy) < 1e-5);
+}
+
+TEST_CASE("frame weighting: merged parts' scales line up with the shot's frames, a part fitted to even noise "
+          "counting 1 in each of its frames")
+{
+    Report measured, even, also_even;
+    measured.shape.frames = 3;
+    measured.frame_scales = {0.5, 1.0, 1.5};
+    even.shape.frames = 2;
+    CHECK(merge_reports({measured, even}).frame_scales == std::vector<double>{0.5, 1.0, 1.5, 1.0, 1.0});
+    CHECK(merge_reports({even, measured}).frame_scales == std::vector<double>{1.0, 1.0, 0.5, 1.0, 1.5});
+    also_even.shape.frames = 4;
+    CHECK(merge_reports({even, also_even}).frame_scales.empty());
 }

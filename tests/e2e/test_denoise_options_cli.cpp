@@ -512,6 +512,7 @@ TEST_CASE("denoise method options: bad values and combinations exit 2 with one l
         {"--no-mode-filter --train-frames 1,2", "--train-frames gives 2 frames"},
         {"--no-mode-filter --train-frames 1-12x4 --rank 3", "--rank 3 needs more than 3 training frames"},
         {"--whiten maybe", "--whiten 'maybe'"},
+        {"--frame-noise uneven", "--frame-noise 'uneven' is not one of measured, even"},
         {"--weight-smoothing --no-weight-smoothing",
          "--weight-smoothing and --no-weight-smoothing contradict"},
         {"--whiten on --transform log", "--whiten on cannot be combined with --transform log"},

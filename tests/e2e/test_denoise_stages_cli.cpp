@@ -220,7 +220,7 @@ TEST_CASE("denoise --stage: missing, duplicated, foreign and other-option partia
         {solve + dir.file("a1.stats") + " " + dir.file("junk.stats"), 1,
          "junk.stats: not a modestack stage file"},
         {solve + dir.file("a1.stats") + " " + dir.file("old.stats"), 1,
-         "old.stats: was written by another modestack (stage file 1, this one reads 4)"},
+         "old.stats: was written by another modestack (stage file 1, this one reads 5)"},
         {solve + dir.file("a1.stats") + " " + dir.file("missing.stats"), 1, "missing.stats: cannot open"},
         {in + "--stage write --solve " + dir.file("a1.stats") + " --survey " + dir.file("shot.survey") +
              " --modes " + dir.file("m1.modes") + " -o " + dir.file("out/d.####.exr"),
