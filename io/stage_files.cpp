@@ -18,7 +18,8 @@ static_assert(__BYTE_ORDER__ == __ORDER_LITTLE_ENDIAN__, "stage files hold littl
 // The first line of every stage file. Its number changes with the layout: 2 added
 // the input's roughness (statistics) and each frame's noise factor (solve).
 // 3: survey rows count each mode's high-pass ratios; 4: modes files hold each row's bias posterior;
-// 5: the survey and modes are of the modes fitted to each frame's measured noise (frame_weighting.h).
+// 5: the survey and modes are of the modes fitted to each frame's measured noise (frame_weighting.h),
+// statistics files hold the cleaned input's roughness and solve files the frame scales' factors.
 constexpr const char* kMagic = "modestack stage file 5";
 constexpr const char* kMagicPrefix = "modestack stage file ";
 
@@ -326,6 +327,7 @@ std::string statistics_bytes(const ShotFingerprint& fingerprint, const denoise::
     header["block_rows"] = denoise::kStageBlockRows;
     header["outliers"] = outliers_json(statistics.outliers);
     header["roughness"] = statistics.roughness; // [block][frame]; JSON doubles round-trip exactly
+    header["cleaned_roughness"] = statistics.cleaned_roughness;
     nlohmann::ordered_json blocks = nlohmann::ordered_json::array();
     Payload payload;
     for (const lowrank::GramAccumulator& block : statistics.blocks) {
@@ -350,6 +352,7 @@ denoise::Statistics read_statistics(const std::vector<StageBytes>& inputs, const
                    header.at("block_rows").get<int>() == denoise::kStageBlockRows &&
                    static_cast<int>(header.at("blocks").size()) == blocks &&
                    header.at("roughness").size() == static_cast<size_t>(blocks) * frames &&
+                   header.at("cleaned_roughness").size() == static_cast<size_t>(blocks) * frames &&
                    header.at("doubles").get<std::size_t>() == blocks * gram_doubles(frames);
         });
     denoise::Statistics shot;
@@ -365,6 +368,8 @@ denoise::Statistics read_statistics(const std::vector<StageBytes>& inputs, const
         shot.outliers.fireflies += file.header.at("outliers").at("fireflies").get<std::int64_t>();
         for (const nlohmann::json& value : file.header.at("roughness"))
             shot.roughness.push_back(value.get<double>());
+        for (const nlohmann::json& value : file.header.at("cleaned_roughness"))
+            shot.cleaned_roughness.push_back(value.get<double>());
     }
     return shot;
 }
@@ -376,6 +381,7 @@ std::string solve_bytes(const ShotFingerprint& fingerprint, const denoise::Solve
     header["gram"] = {{"rows", state.rows}, {"tiles", state.tiles}};
     header["outliers"] = outliers_json(solved.outliers);
     header["frame_noise_factors"] = solved.frame_noise_factors;
+    header["frame_scale_factors"] = solved.frame_scale_factors;
     const denoise::RepeatingNoise& repeating = solved.repeating;
     header["repeating_noise"] = {{"measured", repeating.measured}, {"temporal", repeating.temporal},
                                  {"spatial", repeating.spatial},   {"coarse", repeating.coarse},
@@ -402,7 +408,9 @@ denoise::SolvedSums read_solve(const StageBytes& solve, const ShotFingerprint& f
         solved.outliers.non_finite = file.header.at("outliers").at("non_finite").get<std::int64_t>();
         solved.outliers.fireflies = file.header.at("outliers").at("fireflies").get<std::int64_t>();
         solved.frame_noise_factors = file.header.at("frame_noise_factors").get<std::vector<double>>();
-        if (solved.frame_noise_factors.size() != static_cast<size_t>(frames))
+        solved.frame_scale_factors = file.header.at("frame_scale_factors").get<std::vector<double>>();
+        if (solved.frame_noise_factors.size() != static_cast<size_t>(frames) ||
+            solved.frame_scale_factors.size() != static_cast<size_t>(frames))
             throw bad_input(path, "damaged solve file: its sizes do not agree");
         const nlohmann::json& repeating = file.header.at("repeating_noise");
         solved.repeating.measured = repeating.at("measured").get<bool>();

@@ -86,7 +86,7 @@ Solved solved_from(const PassContext& context, const RunPlan& plan, const Solved
                    const SurveyRows& survey, Report& report)
 {
     const ShotShape shape = context.source.shape();
-    Solved result{solution_from_gram(context.settings, solved.gram, solved.frame_noise_factors), {}, {}};
+    Solved result{solution_from_gram(context.settings, solved.gram, solved.frame_scale_factors), {}, {}};
     report.outliers = solved.outliers;
     if (context.settings.mode_filter.enabled) {
         if (static_cast<int>(survey.sums.size()) != shape.height)
@@ -124,11 +124,13 @@ TaskResult<SolvedSums> solve_task(const PassContext& context, const Statistics& 
     result.output.gram = BlockGram::merge(shot.blocks, result.report.shape.frames);
     result.output.outliers = shot.outliers;
     result.output.frame_noise_factors = frame_noise_factors(shot.roughness, result.report.shape.frames);
+    result.output.frame_scale_factors =
+        frame_noise_factors(shot.cleaned_roughness, result.report.shape.frames);
     // Once for the shot, here rather than in every write task (which then reads only its frames' reach).
     result.output.repeating = result.report.repeating_noise =
         measure_repeating_noise(context.source, context.progress);
     const Solution solution =
-        solution_from_gram(context.settings, result.output.gram, result.output.frame_noise_factors);
+        solution_from_gram(context.settings, result.output.gram, result.output.frame_scale_factors);
     result.report.outliers = shot.outliers;
     result.report.rank_decision = solution.rank_decision;
     describe_solution(context.settings, result.report.shape, solution, solution.rank_decision.kept_modes,
@@ -143,7 +145,7 @@ TaskResult<SurveyRows> survey_task(const PassContext& context, const SolvedSums&
     TaskResult<SurveyRows> result;
     const RunPlan plan = plan_task(context, Stage::Survey, result.report, row_begin, row_end);
     const auto start = Clock::now();
-    const Solution solution = solution_from_gram(context.settings, solved.gram, solved.frame_noise_factors);
+    const Solution solution = solution_from_gram(context.settings, solved.gram, solved.frame_scale_factors);
     result.report.outliers = solved.outliers;
     result.report.rank_decision = solution.rank_decision;
     result.output.row_begin = row_begin;

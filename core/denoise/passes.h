@@ -81,7 +81,7 @@ public:
     /// Adds a band of a pass over the shot (ShotStream::BandPass), in row order.
     void add(Band& band);
     /// The modes and N from every band's sums and each frame's noise factor
-    /// (frame_noise.h, the pass's first read).
+    /// (frame_noise.h, of the pass's first read as cleaned: the sums' samples).
     Solution finish(const std::vector<double>& noise_factors);
 
 private:

@@ -97,13 +97,14 @@ void ShotStream::read_band(Band& band, int row_begin, int row_end, Cleaning clea
     if (cleaning == Cleaning::Again) {
         clean_again(band.view(m_shape.frames), first_sample);
     } else {
-        measure_roughness(band);
+        measure_roughness(band, Roughness::AsRead);
         std::uint8_t* marks =
             m_plan.in_memory || m_cleaned_samples.empty() ? nullptr : m_cleaned_samples.data() + first_sample;
         const lowrank::OutlierCounts found =
             lowrank::clean_outliers(band.view(m_shape.frames), m_outlier_options, marks, row_layout());
         m_outliers.non_finite += found.non_finite;
         m_outliers.fireflies += found.fireflies;
+        measure_roughness(band, Roughness::Cleaned);
     }
     if (patch_rows.patches) { // bitwise, so that a replaced NaN counts too
         const std::int64_t first = (patch_rows.row_begin - patch_rows.first_row) * row_samples();
@@ -179,27 +180,28 @@ bool ShotStream::roll_band(Band& band, int row_begin, int row_end, bool with_pas
     return true;
 }
 
-void ShotStream::measure_roughness(const Band& band)
+void ShotStream::measure_roughness(const Band& band, Roughness which)
 {
-    if (m_row_roughness.empty())
-        m_row_roughness.assign(static_cast<size_t>(m_shape.height) * m_shape.frames, 0.0);
+    std::vector<double>& rows = which == Roughness::AsRead ? m_row_roughness : m_row_cleaned_roughness;
+    if (rows.empty())
+        rows.assign(static_cast<size_t>(m_shape.height) * m_shape.frames, 0.0);
     row_roughness(band.view(m_shape.frames).view(), m_shape.width, m_shape.channels,
                   band.row_end - band.row_begin,
-                  m_row_roughness.data() + static_cast<std::int64_t>(band.row_begin) * m_shape.frames);
+                  rows.data() + static_cast<std::int64_t>(band.row_begin) * m_shape.frames);
 }
 
-std::vector<double> ShotStream::roughness_blocks(int row_begin, int row_end) const
+std::vector<double> ShotStream::roughness_blocks(int row_begin, int row_end, Roughness which) const
 {
-    if (m_row_roughness.empty())
+    const std::vector<double>& rows = which == Roughness::AsRead ? m_row_roughness : m_row_cleaned_roughness;
+    if (rows.empty())
         throw internal_error("roughness_blocks: no first read yet");
-    return denoise::roughness_blocks(m_row_roughness.data() +
-                                         static_cast<std::int64_t>(row_begin) * m_shape.frames,
+    return denoise::roughness_blocks(rows.data() + static_cast<std::int64_t>(row_begin) * m_shape.frames,
                                      m_shape.frames, row_begin, row_end);
 }
 
-std::vector<double> ShotStream::frame_noise_factors() const
+std::vector<double> ShotStream::frame_noise_factors(Roughness which) const
 {
-    return denoise::frame_noise_factors(roughness_blocks(0, m_shape.height), m_shape.frames);
+    return denoise::frame_noise_factors(roughness_blocks(0, m_shape.height, which), m_shape.frames);
 }
 
 void ShotStream::ensure_whole_shot()
@@ -231,11 +233,12 @@ void ShotStream::read_whole_frames(int frame_begin, int frame_end)
 
 void ShotStream::finish_whole_shot()
 {
-    measure_roughness(m_whole);
+    measure_roughness(m_whole, Roughness::AsRead);
     const lowrank::OutlierCounts found =
         lowrank::clean_outliers(m_whole.view(m_shape.frames), m_outlier_options, nullptr, row_layout());
     m_outliers.non_finite += found.non_finite;
     m_outliers.fireflies += found.fireflies;
+    measure_roughness(m_whole, Roughness::Cleaned);
     m_whole_read_ahead = true;
 }
 

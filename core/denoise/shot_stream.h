@@ -51,12 +51,17 @@ public:
     void count_pass() { ++m_passes; }
     /// What the cleaning of the first reads found.
     const lowrank::OutlierCounts& outliers() const { return m_outliers; }
+    /// Which roughness: of the input as read (the estimator choice's frame
+    /// factors) or as cleaned of fireflies (the frame scales of the modes, which
+    /// are fitted to the cleaned samples: frame_weighting.h).
+    enum class Roughness { AsRead, Cleaned };
     /// The input's roughness (frame_noise.h) per block of rows [row_begin,
     /// row_end) and frame, as the first reads of those rows found it (a farm
     /// statistics task's share).
-    std::vector<double> roughness_blocks(int row_begin, int row_end) const;
+    std::vector<double> roughness_blocks(int row_begin, int row_end,
+                                         Roughness which = Roughness::AsRead) const;
     /// Each frame's noise factor (frame_noise.h) once the first pass has read every row.
-    std::vector<double> frame_noise_factors() const;
+    std::vector<double> frame_noise_factors(Roughness which = Roughness::AsRead) const;
     std::int64_t row_samples() const { return static_cast<std::int64_t>(m_shape.width) * m_shape.channels; }
     /// How a band's rows lie in the image, for the firefly test's row neighbours.
     lowrank::ImageRowLayout row_layout() const { return {m_shape.width, m_shape.channels}; }
@@ -139,8 +144,8 @@ private:
     /// A later read's cleaning (Cleaning::Again) of `rows`, whose first sample is
     /// image sample `first_sample`.
     void clean_again(const lowrank::MutableBandView& rows, std::int64_t first_sample);
-    /// Before the cleaning of a first read: the roughness of `band`'s rows.
-    void measure_roughness(const Band& band);
+    /// A first read's roughness of `band`'s rows, before its cleaning (AsRead) or after it.
+    void measure_roughness(const Band& band, Roughness which);
 
     FrameSource& m_source;
     const lowrank::OutlierOptions& m_outlier_options;
@@ -149,7 +154,8 @@ private:
     ShotShape m_shape;
     int m_passes = 0;
     lowrank::OutlierCounts m_outliers;
-    std::vector<double> m_row_roughness; // [row][frame], by the first read of each row
+    std::vector<double> m_row_roughness;         // [row][frame], by the first read of each row
+    std::vector<double> m_row_cleaned_roughness; // the same after its cleaning
     Band m_whole;                        // the kept shot, when it fits in memory
     bool m_whole_read_ahead = false;     // read and cleaned by read_whole_frames and finish_whole_shot
     // Streaming: 1 for each sample whose row (over frames) the outlier cleaning changed.

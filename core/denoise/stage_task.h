@@ -84,7 +84,8 @@ struct Statistics {
     int row_end = 0;
     std::vector<lowrank::GramAccumulator> blocks;
     lowrank::OutlierCounts outliers;
-    std::vector<double> roughness; ///< the input's per block and frame (frame_noise.h)
+    std::vector<double> roughness;         ///< the input's per block and frame (frame_noise.h)
+    std::vector<double> cleaned_roughness; ///< the same of the cleaned input (frame_weighting.h)
 };
 
 /// The solve task's result: every block merged in row order, and the shot's outlier counts.
@@ -92,6 +93,8 @@ struct SolvedSums {
     lowrank::GramAccumulator gram{1};
     lowrank::OutlierCounts outliers;
     std::vector<double> frame_noise_factors; ///< per frame (frame_noise.h)
+    std::vector<double>
+        frame_scale_factors; ///< per frame, of the cleaned input: the modes' (frame_weighting.h)
     RepeatingNoise repeating;                ///< measured by the solve task (repeating_noise.h)
 };
 

@@ -113,7 +113,7 @@ Solution gram_solution(const PassContext& context, ShotStream& stream)
 {
     GramPass gram(context.settings, stream.shape());
     stream.for_each_band([&](Band& band) { gram.add(band); });
-    return gram.finish(stream.frame_noise_factors());
+    return gram.finish(stream.frame_noise_factors(ShotStream::Roughness::Cleaned));
 }
 
 Solution randomized_solution(const PassContext& context, ShotStream& stream)
@@ -164,8 +164,12 @@ Statistics block_statistics(const PassContext& context, ShotStream& stream, int 
     }
     context.progress.end();
     gram.finish();
-    return {row_begin, row_end, std::move(gram.blocks()), stream.outliers(),
-            stream.roughness_blocks(row_begin, row_end)};
+    return {row_begin,
+            row_end,
+            std::move(gram.blocks()),
+            stream.outliers(),
+            stream.roughness_blocks(row_begin, row_end),
+            stream.roughness_blocks(row_begin, row_end, ShotStream::Roughness::Cleaned)};
 }
 
 void describe_solution(const Settings& settings, const ShotShape& shape, const Solution& solution,

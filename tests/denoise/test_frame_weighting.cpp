@@ -6,6 +6,7 @@
 // and merged parts' scales line up with the shot's frames.
 #include "core/common/error.h"
 #include "core/denoise/engine.h"
+#include "core/denoise/estimator_choice.h"
 #include "core/denoise/frame_weighting.h"
 #include "core/denoise/segments.h"
 #include "core/lowrank/basis.h"
@@ -160,4 +161,42 @@ TEST_CASE("frame weighting: merged parts' scales line up with the shot's frames,
     CHECK(merge_reports({even, measured}).frame_scales == std::vector<double>{1.0, 1.0, 0.5, 1.0, 1.5});
     also_even.shape.frames = 4;
     CHECK(merge_reports({even, also_even}).frame_scales.empty());
+}
+
+TEST_CASE(
+    "frame weighting: the scales are measured on the input cleaned of fireflies, which the modes never see")
+{
+    // Even Gaussian noise in every frame; frame 5 also has 2 % fireflies 40× the
+    // signal, which the firefly clamp removes before the Gram sums.
+    const int width = 48, height = 32, frames = 16, fiery = 5;
+    MemoryShot shot;
+    shot.size = {frames, width, height, 3};
+    std::mt19937 generator(11);
+    std::normal_distribution<float> normal(0.0f, 0.1f);
+    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+    for (int t = 0; t < frames; ++t) {
+        std::vector<float> frame(static_cast<size_t>(width) * height * 3);
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x)
+                for (int c = 0; c < 3; ++c) {
+                    const float value = 0.5f + 0.1f * std::sin(0.2f * static_cast<float>(x + t));
+                    const bool firefly = t == fiery && c == 0 && uniform(generator) < 0.02f;
+                    frame[(static_cast<size_t>(y) * width + x) * 3 + c] =
+                        value + normal(generator) + (firefly ? 20.0f : 0.0f);
+                }
+        shot.frames.push_back(frame);
+    }
+    MemorySink sink(shot.size);
+    Settings settings;
+    settings.estimators =
+        parse_estimators("rebuild,input,spatial"); // the choice reports its factors, as read
+    const Report report = run_denoise(shot, sink, settings, Progress::silent());
+    REQUIRE(report.frame_scales.size() == static_cast<size_t>(frames));
+    REQUIRE(report.frame_noise_factors.size() == static_cast<size_t>(frames));
+    REQUIRE(report.outliers.fireflies > 0);
+    MESSAGE("frame " << fiery << ": scale " << report.frame_scales[fiery] << ", the choice's factor as read "
+                     << report.frame_noise_factors[fiery]);
+    CHECK(report.frame_noise_factors[fiery] > 2); // the fireflies as read
+    for (double scale : report.frame_scales)
+        CHECK(scale == doctest::Approx(1.0).epsilon(0.15));
 }

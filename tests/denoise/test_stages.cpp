@@ -100,12 +100,15 @@ Result run_staged(MemoryShot& shot, const Settings& settings, const std::vector<
         tasks.push_back(statistics_task(context, begin, end).output);
     std::sort(tasks.begin(), tasks.end(),
               [](const Statistics& a, const Statistics& b) { return a.row_begin < b.row_begin; });
-    Statistics shot_statistics{0, shot.size.height, {}, {}, {}};
+    Statistics shot_statistics{0, shot.size.height, {}, {}, {}, {}};
     for (Statistics& task : tasks) {
         for (auto& block : task.blocks)
             shot_statistics.blocks.push_back(std::move(block));
         shot_statistics.roughness.insert(shot_statistics.roughness.end(), task.roughness.begin(),
                                          task.roughness.end());
+        shot_statistics.cleaned_roughness.insert(shot_statistics.cleaned_roughness.end(),
+                                                 task.cleaned_roughness.begin(),
+                                                 task.cleaned_roughness.end());
         shot_statistics.outliers.non_finite += task.outliers.non_finite;
         shot_statistics.outliers.fireflies += task.outliers.fireflies;
     }
@@ -267,7 +270,7 @@ TEST_CASE("stages: a statistics task must cover whole blocks of rows, a modes ta
     Statistics last;
     CHECK_NOTHROW(last = statistics_task(context_of(shot, sink, settings), 128, 150).output);
     CHECK(last.blocks.size() == 1);
-    const SolvedSums empty{lowrank::GramAccumulator(shot.size.frames), {}, {}, {}};
+    const SolvedSums empty{lowrank::GramAccumulator(shot.size.frames), {}, {}, {}, {}};
     CHECK_THROWS_WITH_AS(modes_task(context_of(shot, sink, settings), empty, {}, 100, 151),
                          doctest::Contains("rows 0-149"), Error);
     settings.non_negative = NonNegativeMode::KeepSum;
