@@ -60,6 +60,11 @@ RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& 
     return result;
 }
 
+double frame_noise_factor(const RebuildBasis& modes, const std::vector<double>& factors, int t)
+{
+    return modes.frame_scales.size() > 0 ? modes.frame_scales[t] : factors.at(static_cast<size_t>(t));
+}
+
 BandRebuilder::BandRebuilder(const Settings& settings, const ShotShape& shape, const RebuildBasis& modes,
                              const ModeFilterOptions& filter_options, const ModeFilterPlan& plan,
                              int surveyed, const FeatureGuide* features)

@@ -46,6 +46,11 @@ RebuildBasis make_rebuild_basis(const Settings& settings, const lowrank::Basis& 
                                 int surveyed, const TrainingGram* training, double noise_sigma,
                                 const Eigen::VectorXd& frame_scales = {});
 
+/// Frame t's noise level over the shot's that the estimator choice scales s by:
+/// the frame scale D_t the modes were fitted with (s is then the whitened
+/// noise), else the frame's factor of the input as read (frame_noise.h).
+double frame_noise_factor(const RebuildBasis& modes, const std::vector<double>& factors, int t);
+
 /// The mode filter's feature rows over `data`'s rows (with its halo) in
 /// `features`, or null when no feature guides it (`filter.feature_channels` 0).
 const float* band_features(const ModeFilterOptions& filter, const FeatureGuide* guide, const Band& data,

@@ -125,7 +125,7 @@ TaskResult<SolvedSums> solve_task(const PassContext& context, const Statistics& 
     result.output.outliers = shot.outliers;
     result.output.frame_noise_factors = frame_noise_factors(shot.roughness, result.report.shape.frames);
     result.output.frame_scale_factors =
-        frame_noise_factors(shot.cleaned_roughness, result.report.shape.frames);
+        frame_scale_factors(shot.cleaned_roughness, result.report.shape.frames);
     // Once for the shot, here rather than in every write task (which then reads only its frames' reach).
     result.output.repeating = result.report.repeating_noise =
         measure_repeating_noise(context.source, context.progress);
@@ -387,7 +387,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             frame.rebuilt = output.data(), frame.sigma = buffers.sigma.data();
             frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_gain.data() : nullptr;
             frame.noise_scale = noise_scale.data();
-            frame.noise_factor = solved.frame_noise_factors.at(static_cast<size_t>(t));
+            frame.noise_factor = frame_noise_factor(modes, solved.frame_noise_factors, t);
             frame.repeating_share = plan.repeating.counted_share();
             if (reach > 0) { // the per-pixel test's spread, as a whole run makes it
                 SpreadWindow window;

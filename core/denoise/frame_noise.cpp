@@ -10,7 +10,8 @@
 
 namespace modestack::denoise {
 
-void row_roughness(const lowrank::BandView& band, int width, int channels, int band_rows, double* row_sums)
+void row_roughness(const lowrank::BandView& band, int width, int channels, int band_rows, double* row_sums,
+                   RowMeasure measure)
 {
     const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
     tbb::parallel_for(0, band.frames, [&](int t) { // each frame its own sums
@@ -21,7 +22,7 @@ void row_roughness(const lowrank::BandView& band, int width, int channels, int b
                 const double left = row[i - channels], here = row[i], right = row[i + channels];
                 const double difference = here - (left + right) / 2;
                 if (std::isfinite(difference)) // any non-finite of the three makes it so
-                    sum += std::abs(difference);
+                    sum += measure == RowMeasure::Absolute ? std::abs(difference) : difference * difference;
             }
             row_sums[static_cast<std::int64_t>(r) * band.frames + t] = sum;
         }
@@ -57,6 +58,14 @@ std::vector<double> frame_noise_factors(const std::vector<double>& blocks, int f
     if (mean > 0 && std::isfinite(mean))
         for (int t = 0; t < frames; ++t)
             factors[static_cast<size_t>(t)] = levels[static_cast<size_t>(t)] / mean;
+    return factors;
+}
+
+std::vector<double> frame_scale_factors(const std::vector<double>& power_blocks, int frames)
+{
+    std::vector<double> factors = frame_noise_factors(power_blocks, frames);
+    for (double& factor : factors)
+        factor = std::sqrt(factor);
     return factors;
 }
 

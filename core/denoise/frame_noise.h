@@ -23,10 +23,16 @@
 
 namespace modestack::denoise {
 
+/// What a row's sum adds up: |d| (the choice's level, a few fireflies do not
+/// rule it) or d² (the energy the Gram sums see, of the input cleaned of
+/// fireflies: the modes' frame scales, frame_weighting.h).
+enum class RowMeasure { Absolute, Squared };
+
 /// Writes, per row r of `band` (`band_rows` image rows of `width` × `channels`
-/// samples) and frame t, Σ |x − (left + right)/2| of that row of that frame
-/// into row_sums[r * frames + t].
-void row_roughness(const lowrank::BandView& band, int width, int channels, int band_rows, double* row_sums);
+/// samples) and frame t, Σ |d| (or Σ d²), d = x − (left + right)/2, of that row
+/// of that frame into row_sums[r * frames + t].
+void row_roughness(const lowrank::BandView& band, int width, int channels, int band_rows, double* row_sums,
+                   RowMeasure measure = RowMeasure::Absolute);
 
 /// The per-frame sums of each block of kStageBlockRows image rows in rows
 /// [row_begin, row_end) (row_begin a block boundary), from their per-row sums
@@ -35,5 +41,9 @@ std::vector<double> roughness_blocks(const double* row_sums, int frames, int row
 
 /// Each frame's noise factor from every block's sums of the shot, in row order.
 std::vector<double> frame_noise_factors(const std::vector<double>& blocks, int frames);
+
+/// Each frame's noise scale, the root of its energy over the shot's mean, from
+/// every block's sums of d² (RowMeasure::Squared) of the cleaned input.
+std::vector<double> frame_scale_factors(const std::vector<double>& power_blocks, int frames);
 
 } // namespace modestack::denoise

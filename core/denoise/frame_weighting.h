@@ -3,10 +3,12 @@
 // modes by energy, so frames much noisier than the rest (an area light that
 // switches on, a frame lit by a large source) pull modes to their noise, and
 // those modes leave a fixed pattern in the clean frames. With each frame's
-// noise level D_t (its level over the shot's, frame_noise.h, measured on the
-// input cleaned of fireflies: the samples the modes are fitted to; measured
-// as read, a glossy floor's caustic fireflies made D jump ±15 % from frame to
-// frame, and its layer came out 53 % worse) the modes V are
+// noise level D_t (the root of its high-pass energy over the shot's mean,
+// frame_noise.h, on the input cleaned of fireflies: the energy the Gram sums
+// see. Measured as read, a glossy floor's caustic fireflies made D jump ±15 %
+// from frame to frame and its layer came out 53 % worse; measured as the
+// choice's mean |d|, a frame whose noise moved into fewer, brighter pixels read
+// quieter at the same energy, and a light switch cost 17 %) the modes V are
 // found from X D⁻¹, whose noise is even over time (what the truncated SVD, the
 // rank rules and the mode filter assume), and every frame is projected with
 // A = D⁻¹ V and rebuilt with B = D V: x̂ = x D⁻¹ V Vᵀ D. A noise-free shot of

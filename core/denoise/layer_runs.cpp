@@ -150,8 +150,7 @@ std::vector<Report> run_layers(FrameSource& source, FrameSink& sink, const Setti
         }
         progress.end();
         for (size_t i = 0; i < layers.size(); ++i)
-            layers[i]->solution.emplace(
-                grams[i].finish(layers[i]->stream->frame_noise_factors(ShotStream::Roughness::Cleaned)));
+            layers[i]->solution.emplace(grams[i].finish(layers[i]->stream->frame_scale_factors()));
     } else {
         for (auto& layer : layers)
             layer->solution.emplace(randomized_solution(layer->context, *layer->stream));

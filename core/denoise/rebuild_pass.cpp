@@ -217,7 +217,7 @@ void RebuildPass::add_rows(int row, int end)
         choice_frame.rebuilt = frame_output, choice_frame.sigma = frame_sigma;
         choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;
         choice_frame.noise_scale = m_noise_scale.data();
-        choice_frame.noise_factor = report.frame_noise_factors[static_cast<size_t>(frame)];
+        choice_frame.noise_factor = frame_noise_factor(modes, report.frame_noise_factors, frame);
         choice_frame.repeating_share = m_plan.repeating.counted_share();
         Chosen& chosen = m_chosen_of_worker.local();
         if (spread) { // the per-pixel test's spread and the misfit's statistics, from the band's rows

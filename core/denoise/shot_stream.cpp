@@ -187,7 +187,8 @@ void ShotStream::measure_roughness(const Band& band, Roughness which)
         rows.assign(static_cast<size_t>(m_shape.height) * m_shape.frames, 0.0);
     row_roughness(band.view(m_shape.frames).view(), m_shape.width, m_shape.channels,
                   band.row_end - band.row_begin,
-                  rows.data() + static_cast<std::int64_t>(band.row_begin) * m_shape.frames);
+                  rows.data() + static_cast<std::int64_t>(band.row_begin) * m_shape.frames,
+                  which == Roughness::AsRead ? RowMeasure::Absolute : RowMeasure::Squared);
 }
 
 std::vector<double> ShotStream::roughness_blocks(int row_begin, int row_end, Roughness which) const
@@ -199,9 +200,15 @@ std::vector<double> ShotStream::roughness_blocks(int row_begin, int row_end, Rou
                                      m_shape.frames, row_begin, row_end);
 }
 
-std::vector<double> ShotStream::frame_noise_factors(Roughness which) const
+std::vector<double> ShotStream::frame_noise_factors() const
 {
-    return denoise::frame_noise_factors(roughness_blocks(0, m_shape.height, which), m_shape.frames);
+    return denoise::frame_noise_factors(roughness_blocks(0, m_shape.height), m_shape.frames);
+}
+
+std::vector<double> ShotStream::frame_scale_factors() const
+{
+    return denoise::frame_scale_factors(roughness_blocks(0, m_shape.height, Roughness::Cleaned),
+                                        m_shape.frames);
 }
 
 void ShotStream::ensure_whole_shot()

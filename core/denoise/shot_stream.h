@@ -51,9 +51,10 @@ public:
     void count_pass() { ++m_passes; }
     /// What the cleaning of the first reads found.
     const lowrank::OutlierCounts& outliers() const { return m_outliers; }
-    /// Which roughness: of the input as read (the estimator choice's frame
-    /// factors) or as cleaned of fireflies (the frame scales of the modes, which
-    /// are fitted to the cleaned samples: frame_weighting.h).
+    /// Which roughness: Σ |d| of the input as read (the estimator choice's
+    /// frame factors) or Σ d² of the input cleaned of fireflies (the frame
+    /// scales of the modes, which are fitted to the cleaned samples' energy:
+    /// frame_weighting.h).
     enum class Roughness { AsRead, Cleaned };
     /// The input's roughness (frame_noise.h) per block of rows [row_begin,
     /// row_end) and frame, as the first reads of those rows found it (a farm
@@ -61,7 +62,9 @@ public:
     std::vector<double> roughness_blocks(int row_begin, int row_end,
                                          Roughness which = Roughness::AsRead) const;
     /// Each frame's noise factor (frame_noise.h) once the first pass has read every row.
-    std::vector<double> frame_noise_factors(Roughness which = Roughness::AsRead) const;
+    std::vector<double> frame_noise_factors() const;
+    /// Each frame's noise scale for the modes (frame_noise.h, frame_scale_factors), then.
+    std::vector<double> frame_scale_factors() const;
     std::int64_t row_samples() const { return static_cast<std::int64_t>(m_shape.width) * m_shape.channels; }
     /// How a band's rows lie in the image, for the firefly test's row neighbours.
     lowrank::ImageRowLayout row_layout() const { return {m_shape.width, m_shape.channels}; }
@@ -155,7 +158,7 @@ private:
     int m_passes = 0;
     lowrank::OutlierCounts m_outliers;
     std::vector<double> m_row_roughness;         // [row][frame], by the first read of each row
-    std::vector<double> m_row_cleaned_roughness; // the same after its cleaning
+    std::vector<double> m_row_cleaned_roughness; // Σ d² after its cleaning
     Band m_whole;                        // the kept shot, when it fits in memory
     bool m_whole_read_ahead = false;     // read and cleaned by read_whole_frames and finish_whole_shot
     // Streaming: 1 for each sample whose row (over frames) the outlier cleaning changed.

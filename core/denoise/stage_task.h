@@ -85,7 +85,7 @@ struct Statistics {
     std::vector<lowrank::GramAccumulator> blocks;
     lowrank::OutlierCounts outliers;
     std::vector<double> roughness;         ///< the input's per block and frame (frame_noise.h)
-    std::vector<double> cleaned_roughness; ///< the same of the cleaned input (frame_weighting.h)
+    std::vector<double> cleaned_roughness; ///< Σ d² of the cleaned input, the same way (frame_weighting.h)
 };
 
 /// The solve task's result: every block merged in row order, and the shot's outlier counts.

@@ -113,7 +113,7 @@ Solution gram_solution(const PassContext& context, ShotStream& stream)
 {
     GramPass gram(context.settings, stream.shape());
     stream.for_each_band([&](Band& band) { gram.add(band); });
-    return gram.finish(stream.frame_noise_factors(ShotStream::Roughness::Cleaned));
+    return gram.finish(stream.frame_scale_factors());
 }
 
 Solution randomized_solution(const PassContext& context, ShotStream& stream)

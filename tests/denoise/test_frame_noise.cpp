@@ -1,7 +1,9 @@
 // Each frame's noise factor (core/denoise/frame_noise.h): the mean absolute
 // horizontal high-pass of a frame over the shot's mean. It recovers the ratio
 // of the frames' noise levels on white noise, skips non-finite values, says 1
-// when there is no noise, and a farm's blocks of rows give the bits of a whole run.
+// when there is no noise, and a farm's blocks of rows give the bits of a whole run;
+// the modes' scales (frame_scale_factors, of Σ d²) recover the root of each
+// frame's energy over the mean.
 #include "core/common/error.h"
 #include "core/denoise/frame_noise.h"
 #include "core/denoise/stage_task.h"
@@ -36,13 +38,13 @@ struct NoisyShot {
     }
     std::int64_t per_frame() const { return static_cast<std::int64_t>(width) * height * channels; }
     // The per-row sums of rows [row_begin, row_end), as a stream's first read of them finds them.
-    std::vector<double> row_sums(int row_begin, int row_end) const
+    std::vector<double> row_sums(int row_begin, int row_end, RowMeasure measure = RowMeasure::Absolute) const
     {
         const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
         lowrank::BandView band{data.data() + row_begin * row_samples, (row_end - row_begin) * row_samples,
                                frames, per_frame()};
         std::vector<double> sums(static_cast<size_t>(row_end - row_begin) * frames);
-        row_roughness(band, width, channels, row_end - row_begin, sums.data());
+        row_roughness(band, width, channels, row_end - row_begin, sums.data(), measure);
         return sums;
     }
 };
@@ -75,6 +77,22 @@ TEST_CASE("frame noise: on white noise the factors are the frames' noise levels 
     for (size_t t = 0; t < levels.size(); ++t) {
         CAPTURE(t);
         CHECK(factors[t] == doctest::Approx(levels[t] / mean).epsilon(0.02));
+    }
+}
+
+TEST_CASE("frame noise: on white noise the modes' scales are the root of each frame's energy over the mean")
+{
+    // Levels σ_t: the scale is σ_t / sqrt(mean σ²), what whitens the frames' energy.
+    const std::vector<double> levels{0.05, 0.1, 0.2, 0.05, 0.1};
+    const NoisyShot shot(96, 64, 3, levels, 7);
+    const std::vector<double> scales = frame_scale_factors(
+        roughness_blocks(shot.row_sums(0, 64, RowMeasure::Squared).data(), shot.frames, 0, 64), shot.frames);
+    REQUIRE(scales.size() == levels.size());
+    const double mean_square = (0.0025 + 0.01 + 0.04 + 0.0025 + 0.01) / 5;
+    for (size_t t = 0; t < levels.size(); ++t) {
+        CAPTURE(t);
+        CHECK(std::abs(scales[t] / (levels[t] / std::sqrt(mean_square)) - 1.0) <
+              0.04); // 18432 samples a frame
     }
 }
 
