@@ -192,7 +192,8 @@ void BandRebuilder::kept_noise_of_frame(const Eigen::MatrixXd& temporal, int t, 
     // The gains stand for the derivative Σ_j B_tj A_tj gain_j, and B_tj A_tj =
     // V_tj² whatever the frame scale D_t; the noise kept is B_tj² gain_j times
     // the whitened coefficients' noise, D_t² in it.
-    const double scale = what == KeptNoise::Gain ? frame_variance(m_modes.frame_scales, t) : 1.0;
+    const double scale =
+        what == KeptNoise::Gain ? lowrank::frame_noise_variance(m_modes.frame_scales, t) : 1.0;
     for (int j = 0; j < modes; ++j) {
         const bool surveyed = what == KeptNoise::Noise && j < static_cast<int>(m_plan.modes.size());
         weights[static_cast<size_t>(j)] = temporal(t, j) * temporal(t, j) / scale *

@@ -370,7 +370,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
                              rebuilder.confidence(), shot.noise_variance.data(), modes.leverages(t),
                              shot.gain_modes > 0 ? buffers.kept_noise.data() : nullptr, shot.bias.data(),
                              buffers.sigma.data(), first_mode_term(modes.temporal, t, first_mode_bias),
-                             frame_variance(modes.frame_scales, t));
+                             lowrank::frame_noise_variance(modes.frame_scales, t));
         // The output: made when the frame was read where the choice reads the
         // frames around (sigma above still needed the unfiltered rebuild as it is).
         NonNegativeCounts counts = own.rebuilt_counts;

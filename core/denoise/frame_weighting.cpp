@@ -43,9 +43,4 @@ Eigen::MatrixXd rebuild_weights(const Eigen::MatrixXd& modes, const Eigen::Vecto
     return scales.asDiagonal() * modes;
 }
 
-double frame_variance(const Eigen::VectorXd& scales, int t)
-{
-    return scales.size() == 0 ? 1.0 : scales[t] * scales[t];
-}
-
 } // namespace modestack::denoise

@@ -45,7 +45,7 @@ lowrank::GramAccumulator scaled_gram(const lowrank::GramAccumulator& gram, const
 Eigen::MatrixXd projection_weights(const Eigen::MatrixXd& modes, const Eigen::VectorXd& scales);
 /// D M: the rebuild; M itself when `scales` is empty.
 Eigen::MatrixXd rebuild_weights(const Eigen::MatrixXd& modes, const Eigen::VectorXd& scales);
-/// D_t² (1 when `scales` is empty): frame t's noise variance over the whitened s².
-double frame_variance(const Eigen::VectorXd& scales, int t);
+// Frame t's noise variance over the whitened s², D_t²: lowrank::frame_noise_variance
+// (core/lowrank/confidence.h), where sigma needs it too.
 
 } // namespace modestack::denoise

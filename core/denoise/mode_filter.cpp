@@ -169,7 +169,7 @@ void coefficient_noise_variance(const BandView& noisy, const BandView& coefficie
                     energy[k] += static_cast<double>(frame_row[k]) * frame_row[k];
                 continue;
             }
-            const double weight = 1.0 / (frame_scales[t] * frame_scales[t]);
+            const double weight = 1.0 / lowrank::frame_noise_variance(frame_scales, t);
             for (std::int64_t k = 0; k < row_length; ++k)
                 energy[k] += static_cast<double>(frame_row[k]) * frame_row[k] * weight;
         }

@@ -154,7 +154,7 @@ void RebuildPass::add_rows(int row, int end)
                                  filter ? kept_noise.data() : nullptr, posteriors.data(),
                                  sigma + t * sigma_stride,
                                  first_mode_term(modes.temporal, t, rebuilder.first_mode_bias()),
-                                 frame_variance(modes.frame_scales, t));
+                                 lowrank::frame_noise_variance(modes.frame_scales, t));
     });
     lowrank::MutableBandView output_view{rebuilder.rebuilt().data() + (first - residual_begin) * row_samples,
                                          valid, frames, rebuilt_stride};

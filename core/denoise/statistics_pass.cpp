@@ -68,18 +68,6 @@ Solution solved(lowrank::Basis basis, const Settings& settings, std::optional<Tr
     return solution;
 }
 
-// The Gram route's solve: the modes of X D⁻¹ with the measured frame scales
-// (frame_weighting.h), of X with --frame-noise even.
-Solution solved_gram(const Settings& settings, const lowrank::GramAccumulator& gram,
-                     const std::vector<double>& noise_factors)
-{
-    const auto start = Clock::now();
-    Eigen::VectorXd scales = settings.measured_frame_noise ? frame_scales(noise_factors) : Eigen::VectorXd();
-    lowrank::Basis basis = lowrank::basis_from_gram(scaled_gram(gram, scales));
-    basis.passes = 1;
-    return solved(std::move(basis), settings, std::nullopt, seconds_since(start), std::move(scales));
-}
-
 } // namespace
 
 GramPass::GramPass(const Settings& settings, const ShotShape& shape)
@@ -102,7 +90,7 @@ Solution GramPass::finish(const std::vector<double>& noise_factors)
 {
     m_gram.finish();
     if (!m_training)
-        return solved_gram(m_settings, m_gram.total(), noise_factors);
+        return solution_from_gram(m_settings, m_gram.total(), noise_factors);
     const auto start = Clock::now();
     lowrank::Basis basis = m_training->basis();
     basis.passes = 1;
@@ -137,10 +125,16 @@ Solution randomized_solution(const PassContext& context, ShotStream& stream)
     return solved(std::move(basis), settings, std::nullopt, 0);
 }
 
+// The modes of X D⁻¹ with the measured frame scales (frame_weighting.h), of X
+// with --frame-noise even.
 Solution solution_from_gram(const Settings& settings, const lowrank::GramAccumulator& gram,
                             const std::vector<double>& noise_factors)
 {
-    return solved_gram(settings, gram, noise_factors);
+    const auto start = Clock::now();
+    Eigen::VectorXd scales = settings.measured_frame_noise ? frame_scales(noise_factors) : Eigen::VectorXd();
+    lowrank::Basis basis = lowrank::basis_from_gram(scaled_gram(gram, scales));
+    basis.passes = 1;
+    return solved(std::move(basis), settings, std::nullopt, seconds_since(start), std::move(scales));
 }
 
 Statistics block_statistics(const PassContext& context, ShotStream& stream, int row_begin, int row_end)

@@ -271,7 +271,7 @@ void residual_noise_variance(const BandView& noisy, const BandView& rebuilt, con
                         energy[static_cast<std::size_t>(i)] += power[i];
                     continue;
                 }
-                const double weight = 1.0 / (frame_scales(t) * frame_scales(t)); // the residual r_t / D_t
+                const double weight = 1.0 / frame_noise_variance(frame_scales, t); // the residual r_t / D_t
                 for (std::int64_t i = row0; i < row0 + count; ++i)
                     energy[static_cast<std::size_t>(i)] += power[i] * weight;
             }
@@ -358,7 +358,7 @@ std::vector<BiasPosterior> row_bias_posteriors(const ImageBandShape& shape, int 
         for (Eigen::Index t = 0; t < leverages.size(); ++t)
             count_bias_ratios(shape, valid_y0 + r, valid_y0 + r + 1, options, noise_variance + offset,
                               leverages(t), means + t * means_stride + offset, &counts,
-                              frame_scales.size() == 0 ? 1.0 : frame_scales(t) * frame_scales(t));
+                              frame_noise_variance(frame_scales, t));
         posteriors[static_cast<std::size_t>(r)] = fit_bias_posterior(counts);
     });
     return posteriors;

@@ -57,6 +57,14 @@ struct ConfidenceOptions {
     double bias_significance = 1.0;
 };
 
+/// D_t² (1 when `frame_scales` is empty): frame t's noise variance over the
+/// whitened s² when the modes are fitted to frames of uneven noise
+/// (denoise/frame_weighting.h).
+inline double frame_noise_variance(const Eigen::VectorXd& frame_scales, Eigen::Index t)
+{
+    return frame_scales.size() == 0 ? 1.0 : frame_scales(t) * frame_scales(t);
+}
+
 /// Writes sigma for rows [valid_y0, valid_y1) of the band: `sigma` has
 /// width·(valid_y1 − valid_y0)·channels rows and F frames, same interleaving. `noisy`
 /// and `rebuilt` hold the whole band (with its halo rows) in `shape`; `leverages` is h

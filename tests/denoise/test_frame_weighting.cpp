@@ -10,6 +10,7 @@
 #include "core/denoise/frame_weighting.h"
 #include "core/denoise/segments.h"
 #include "core/lowrank/basis.h"
+#include "core/lowrank/confidence.h"
 #include "tests/denoise/memory_shot.h"
 
 #include <doctest/doctest.h>
@@ -96,8 +97,8 @@ TEST_CASE(
     const Eigen::VectorXd leverages = (rebuild.array() * projection.array()).rowwise().sum();
     const Eigen::VectorXd expected = modes.array().square().rowwise().sum();
     CHECK((leverages - expected).norm() < 1e-12);
-    CHECK(frame_variance(scales, 0) == doctest::Approx(0.09));
-    CHECK(frame_variance(Eigen::VectorXd(), 3) == 1.0);
+    CHECK(lowrank::frame_noise_variance(scales, 0) == doctest::Approx(0.09));
+    CHECK(lowrank::frame_noise_variance(Eigen::VectorXd(), 3) == 1.0);
 }
 
 TEST_CASE("frame weighting: a frame far quieter than the shot gets the smallest scale, not a vanishing one")
