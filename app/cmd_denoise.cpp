@@ -77,9 +77,12 @@ Subcommand add_denoise_command(CLI::App& parent)
     command->add_flag("--no-firefly-clamp", options->no_firefly_clamp,
                       "Keep fireflies as they are (default: clamp them, spreading their energy over the pixel's "
                       "frames)");
-    command->add_option("--firefly-k", options->firefly_k,
-                        "Firefly threshold: temporal median + k x 1.4826 x MAD of the pixel, raised by light its row "
-                        "neighbours share in that frame")
+    command
+        ->add_option(
+            "--firefly-k", options->firefly_k,
+            "Firefly threshold: temporal median + k x 1.4826 x MAD of the pixel (with --frame-noise "
+            "measured, scaled to each frame's noise level), raised by light its row neighbours share in "
+            "that frame")
         ->check(CLI::PositiveNumber);
     command->add_option("--sigma-radius", options->sigma_radius,
                         "Spatial pooling radius of sigma, in pixels (0 or more)");

@@ -51,10 +51,9 @@ void add_method_options(CLI::App& command, MethodOptions& options)
     command.add_option(
         "--frame-noise", options.frame_noise,
         "measured (default): fit the modes to each frame's own noise level (measured from the input), so "
-        "that "
-        "a few noisy frames (a large light switched on) do not leave their noise in the clean ones; even: "
-        "count every frame as equally noisy. Measured needs the Gram solver and no --train-frames (even "
-        "there)");
+        "that a few noisy frames (a large light switched on) do not leave their noise in the clean ones, and "
+        "judge fireflies in each frame at its own level; even: count every frame as equally noisy. The fit "
+        "needs the Gram solver and no --train-frames (even there)");
     command.add_option(
         "--estimators", options.estimators,
         "Estimators each pixel may take, comma-separated: rebuild (the temporal rebuild), input (the input "
@@ -151,6 +150,9 @@ denoise::Transform apply_method_options(const MethodOptions& options, bool objec
         throw usage_error(
             fmt::format("--frame-noise '{}' is not one of measured, even", options.frame_noise));
     settings.measured_frame_noise = options.frame_noise == "measured" && options.train_frames.empty();
+    // The firefly clamp judges each frame at its own noise level whenever it is
+    // measured (the training frames' fit aside: the clamp sees every frame).
+    settings.outliers.per_frame_noise = options.frame_noise == "measured";
     if (settings.optimal_shrinkage && settings.mode_filter.enabled)
         throw usage_error(
             "--shrink optimal needs --no-mode-filter: the mode filter already shrinks each mode");

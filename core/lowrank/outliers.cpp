@@ -25,8 +25,9 @@ struct RowStats {
     double median = 0;           // of the row, its non-finite samples replaced
     double fill = 0;             // what a non-finite sample becomes: the median of the finite ones
     double typical = 0;          // the median of |x|
-    double spread = 0;           // max(MAD, floor): the plain threshold's spread
-    double threshold = kNoClamp; // the plain threshold; kNoClamp: no sample above it
+    double spread = 0;           // max(MAD, floor): the plain threshold's spread (per-frame scales: the MAD)
+    double threshold = kNoClamp; // the plain threshold (at scale 1); kNoClamp: no sample above it
+    double floor = 0;            // per-frame scales: the spread's floor (spread is then the scaled MAD)
     std::int64_t non_finite = 0; // samples replaced
 };
 
@@ -41,6 +42,10 @@ struct GroupScratch {
     std::vector<double> row;
     std::vector<double> to_median; // the finite samples, |samples| or deviations a median is taken of
     std::vector<double> select_a, select_b; // row_median's work space
+    // Per frame, its noise scale along this image row (OutlierOptions::
+    // per_frame_noise); empty: one threshold for every frame.
+    std::vector<double> scale;
+    std::vector<float> high_pass; // one frame's |high-pass| samples, for their median
 
     void resize(std::size_t rows, std::size_t frames)
     {
@@ -86,6 +91,43 @@ void first_load(GroupScratch& scratch, std::int64_t r, RowStats& stats)
     load(scratch, r, stats);
 }
 
+// row_statistics' firefly check with each frame judged at its own scale s_t
+// (outliers.h, per_frame_noise): frame t's threshold is median +
+// k·1.4826·max(s_t·MAD, floor), the MAD that of the deviations (x_t − median)/s_t.
+// The floor only raises thresholds, so the shortcuts of the plain check hold.
+void scaled_statistics(GroupScratch& scratch, const OutlierOptions& options, double floor_spread,
+                       RowStats& stats)
+{
+    const std::size_t frames = scratch.row.size();
+    const double median = stats.median, reach = options.firefly_k * 1.4826;
+    double highest = -std::numeric_limits<double>::infinity(), highest_scaled = highest;
+    for (std::size_t t = 0; t < frames; ++t) {
+        highest = std::max(highest, scratch.row[t] - median);
+        highest_scaled = std::max(highest_scaled, (scratch.row[t] - median) / scratch.scale[t]);
+    }
+    if (highest <= reach * floor_spread)
+        return;
+    // The MAD that would put the highest scaled deviation at its threshold:
+    // when fewer than half of the deviations lie below it, the MAD is larger.
+    std::size_t below = 0;
+    const double enough = highest_scaled / reach;
+    for (std::size_t t = 0; t < frames; ++t) {
+        scratch.to_median[t] = std::abs(scratch.row[t] - median) / scratch.scale[t];
+        below += scratch.to_median[t] < enough ? 1 : 0;
+    }
+    if (below < (frames + 1) / 2)
+        return;
+    const double mad = scratch.median(scratch.to_median, frames);
+    bool above = false;
+    for (std::size_t t = 0; t < frames && !above; ++t)
+        above = scratch.row[t] - median > reach * std::max(mad * scratch.scale[t], floor_spread);
+    if (!above)
+        return;
+    stats.spread = mad;
+    stats.floor = floor_spread;
+    stats.threshold = median + reach * std::max(mad, floor_spread); // at scale 1: marks a row to clean
+}
+
 // The median of scratch.row (NaN/Inf replaced) and, when a firefly check is
 // asked, the plain threshold median_t + k·1.4826·max(MAD_t, floor) if some sample
 // lies above it (outliers.h).
@@ -105,6 +147,10 @@ void row_statistics(GroupScratch& scratch, const OutlierOptions& options, bool c
     }
     stats.typical = typical_magnitude;
     const double floor_spread = std::max(options.mad_floor_fraction * typical_magnitude, 1e-30);
+    if (!scratch.scale.empty()) {
+        scaled_statistics(scratch, options, floor_spread, stats);
+        return;
+    }
     const auto threshold_of = [&](double mad) {
         return median + options.firefly_k * 1.4826 * std::max(mad, floor_spread);
     };
@@ -157,15 +203,73 @@ double shared_excess(const GroupScratch& scratch, const GroupShape& shape, std::
     return std::max({left, right, 0.0});
 }
 
+// Each frame's noise scale along one image row (OutlierOptions::
+// per_frame_noise): the median |x − (left + right)/2| of the row's samples as
+// read in that frame, over the mean of those medians, at least
+// kLeastFrameScale; all 1 where every median is 0. A median, so that the
+// fireflies being judged do not raise it; the whole image row, so that a
+// frame's scale does not hang on the few pixels of one piece.
+void image_row_frame_scales(const MutableBandView& band, std::int64_t first, const ImageRowLayout& layout,
+                            GroupScratch& scratch)
+{
+    const int frames = band.frames;
+    const std::int64_t c = layout.channels, samples = static_cast<std::int64_t>(layout.width) * c;
+    scratch.scale.assign(static_cast<std::size_t>(frames), 1.0);
+    double sum = 0;
+    for (int t = 0; t < frames; ++t) {
+        scratch.high_pass.clear();
+        const float* row = &band.at(first, t);
+        for (std::int64_t i = c; i + c < samples; ++i) {
+            const double d =
+                static_cast<double>(row[i]) - 0.5 * (static_cast<double>(row[i - c]) + row[i + c]);
+            if (std::isfinite(d))
+                scratch.high_pass.push_back(static_cast<float>(std::abs(d)));
+        }
+        double median = 0;
+        if (!scratch.high_pass.empty()) {
+            const auto middle =
+                scratch.high_pass.begin() + static_cast<std::ptrdiff_t>(scratch.high_pass.size() / 2);
+            std::nth_element(scratch.high_pass.begin(), middle, scratch.high_pass.end());
+            median = *middle;
+        }
+        scratch.scale[static_cast<std::size_t>(t)] = median;
+        sum += median;
+    }
+    if (!(sum > 0)) {
+        std::fill(scratch.scale.begin(), scratch.scale.end(), 1.0);
+        return;
+    }
+    const double mean = sum / frames;
+    for (double& scale : scratch.scale)
+        scale = std::max(scale / mean, kLeastFrameScale);
+}
+
+// The plain threshold of frame t, at its noise scale where there are scales.
+double frame_threshold(const RowStats& stats, const OutlierOptions& options, const GroupScratch& scratch,
+                       int t)
+{
+    if (scratch.scale.empty())
+        return stats.threshold;
+    return stats.median +
+           options.firefly_k * 1.4826 *
+               std::max(stats.spread * scratch.scale[static_cast<std::size_t>(t)], stats.floor);
+}
+
 // The threshold of sample t of a row with a plain threshold, lifted by the light
-// its neighbours share in that frame, the spread scaled to that light's level.
-double lifted_threshold(const RowStats& stats, const OutlierOptions& options, double shared)
+// its neighbours share in that frame, the spread scaled to that light's level
+// (and to the frame's noise scale).
+double lifted_threshold(const RowStats& stats, const OutlierOptions& options, const GroupScratch& scratch,
+                        int t, double shared)
 {
     if (!(shared > 0))
-        return stats.threshold;
+        return frame_threshold(stats, options, scratch, t);
     const double expected = stats.median + shared;
     const double level = stats.typical > 0 && expected > stats.typical ? expected / stats.typical : 1.0;
-    const double spread = std::max(stats.spread * level, options.mad_floor_fraction * std::abs(expected));
+    const double row_spread =
+        scratch.scale.empty()
+            ? stats.spread
+            : std::max(stats.spread * scratch.scale[static_cast<std::size_t>(t)], stats.floor);
+    const double spread = std::max(row_spread * level, options.mad_floor_fraction * std::abs(expected));
     return expected + options.firefly_k * 1.4826 * spread;
 }
 
@@ -233,11 +337,12 @@ OutlierCounts clean_group(const MutableBandView& band, std::int64_t first, const
             double excess = 0;
             for (int t = 0; t < frames; ++t) {
                 double& value = scratch.row[static_cast<std::size_t>(t)];
-                if (!(value > stats.threshold))
+                if (!(value > frame_threshold(stats, options, scratch, t)))
                     continue;
                 const double threshold =
-                    shape.channels > 0 ? lifted_threshold(stats, options, shared_excess(scratch, shape, r, t))
-                                       : stats.threshold;
+                    shape.channels > 0
+                        ? lifted_threshold(stats, options, scratch, t, shared_excess(scratch, shape, r, t))
+                        : stats.threshold;
                 if (value > threshold) {
                     excess += value - threshold;
                     value = threshold;
@@ -300,6 +405,15 @@ OutlierCounts clean_groups(const MutableBandView& band, const OutlierOptions& op
         shape.own_end = (x1 - read0) * layout.channels;
         return shape;
     };
+    // Each frame judged at its own scale along the image row, measured on the
+    // row as read before any piece cleans it; only for rows something cleans.
+    const bool scaled = pixels && options.per_frame_noise && options.fireflies && band.frames >= 3;
+    const auto row_is_cleaned = [&](std::int64_t image_row) {
+        if (only == nullptr)
+            return true;
+        const std::uint8_t* marks = only + image_row * row_samples;
+        return std::any_of(marks, marks + row_samples, [](std::uint8_t mark) { return mark != 0; });
+    };
     std::vector<OutlierCounts> per_group(static_cast<std::size_t>(groups));
     tbb::enumerable_thread_specific<GroupScratch> scratches;
     throw_if_cancelled();
@@ -310,6 +424,9 @@ OutlierCounts clean_groups(const MutableBandView& band, const OutlierOptions& op
                           GroupScratch& scratch = scratches.local();
                           for (std::int64_t task = range.begin(); task != range.end(); ++task) {
                               scratch.previous_rows = 0;
+                              scratch.scale.clear();
+                              if (scaled && row_is_cleaned(task))
+                                  image_row_frame_scales(band, task * row_samples, layout, scratch);
                               for (std::int64_t g = task * pieces_per_row; g < (task + 1) * pieces_per_row; ++g) {
                                   std::int64_t first = 0;
                                   const GroupShape shape = shape_of(g, first);

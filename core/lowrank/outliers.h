@@ -55,7 +55,23 @@ struct OutlierOptions {
     /// its frames keeps threshold ≈ 0: all its lit samples are spread evenly over the
     /// frames, i.e. replaced by the row's temporal mean, which keeps their energy.
     double mad_floor_fraction = 0.1;
+    /// Judge each frame at its own noise level, where the rows are pixels of an
+    /// image row (ImageRowLayout): a frame's scale s_t is the median |x − (left
+    /// + right)/2| of the image row's samples in that frame, as read, over the
+    /// mean of those medians over the frames (at least kLeastFrameScale). The
+    /// threshold of frame t is median + k·1.4826·max(s_t·MAD, floor), the MAD
+    /// that of (x − median)/s. With one threshold for every frame, the ordinary
+    /// upper samples of a few noisy frames (a large light switched on) read as
+    /// fireflies, and their excess, spread evenly, brightened every clean frame
+    /// and darkened the noisy ones. The excess is still spread evenly: given
+    /// back in proportion to s_t it measured worse (bench/results/estimators.md,
+    /// section 24). False, or rows that are not pixels: one threshold.
+    bool per_frame_noise = true;
 };
+
+/// The least frame scale of the per-frame threshold: a frame far quieter than
+/// the shot's mean (a black frame) is judged at 1/8 of the mean noise.
+inline constexpr double kLeastFrameScale = 0.125;
 
 /// How a band's rows lie in the image: `channels` consecutive rows are one pixel's
 /// channels and width·channels consecutive rows one image row, from the band's

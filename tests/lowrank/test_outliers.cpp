@@ -303,13 +303,49 @@ TEST_CASE("a band that is not whole image rows of its layout is an internal erro
 
 namespace {
 
+// Each frame's noise scale along every image row (OutlierOptions::
+// per_frame_noise) written out plainly: the median |x − (left + right)/2| of
+// the row's finite values as read (the upper middle one, by a full sort), over
+// the mean of the frames' medians, at least kLeastFrameScale; 1 where all are 0.
+std::vector<std::vector<double>> plain_frame_scales(const FrameMatrix& matrix, int width, int channels)
+{
+    const int frames = matrix.frames;
+    const std::int64_t row_samples = static_cast<std::int64_t>(width) * channels;
+    std::vector<std::vector<double>> scales;
+    for (std::int64_t first = 0; first < matrix.rows; first += row_samples) {
+        std::vector<double> scale(static_cast<std::size_t>(frames));
+        double sum = 0;
+        for (int t = 0; t < frames; ++t) {
+            std::vector<float> high_pass;
+            for (std::int64_t i = channels; i + channels < row_samples; ++i) {
+                const double d = static_cast<double>(matrix.at(first + i, t)) -
+                                 0.5 * (static_cast<double>(matrix.at(first + i - channels, t)) +
+                                        matrix.at(first + i + channels, t));
+                if (std::isfinite(d))
+                    high_pass.push_back(static_cast<float>(std::abs(d)));
+            }
+            std::sort(high_pass.begin(), high_pass.end());
+            scale[static_cast<std::size_t>(t)] = high_pass.empty() ? 0.0 : high_pass[high_pass.size() / 2];
+            sum += scale[static_cast<std::size_t>(t)];
+        }
+        for (double& value : scale)
+            value = sum > 0 ? std::max(value / (sum / frames), kLeastFrameScale) : 1.0;
+        scales.push_back(scale);
+    }
+    return scales;
+}
+
 // The rule with row neighbours written out plainly (outliers.h): every row's
 // NaN/Inf replaced first, its median and plain threshold by full sorts, then
-// each sample above the plain threshold judged against the lifted one.
+// each sample above the plain threshold judged against the lifted one; with
+// per_frame_noise, each frame's thresholds at its own scale.
 std::int64_t plain_clean_with_neighbours(FrameMatrix& matrix, int width, int channels,
                                          const OutlierOptions& options)
 {
     const int frames = matrix.frames;
+    const std::vector<std::vector<double>> scales = options.per_frame_noise
+                                                        ? plain_frame_scales(matrix, width, channels)
+                                                        : std::vector<std::vector<double>>{};
     std::vector<std::vector<double>> rows(static_cast<std::size_t>(matrix.rows));
     std::vector<double> medians(rows.size());
     for (std::int64_t i = 0; i < matrix.rows; ++i) {
@@ -327,14 +363,24 @@ std::int64_t plain_clean_with_neighbours(FrameMatrix& matrix, int width, int cha
     for (std::int64_t i = 0; i < matrix.rows; ++i) {
         std::vector<double> row = rows[static_cast<std::size_t>(i)];
         const double median = medians[static_cast<std::size_t>(i)];
+        const auto scale = [&](int t) {
+            return scales.empty()
+                       ? 1.0
+                       : scales[static_cast<std::size_t>(i / row_samples)][static_cast<std::size_t>(t)];
+        };
         std::vector<double> deviations, magnitudes;
-        for (double value : row) {
-            deviations.push_back(std::abs(value - median));
+        for (int t = 0; t < frames; ++t) {
+            const double value = row[static_cast<std::size_t>(t)];
+            deviations.push_back(scales.empty() ? std::abs(value - median)
+                                                : std::abs(value - median) / scale(t));
             magnitudes.push_back(std::abs(value));
         }
         const double typical = *std::min_element(row.begin(), row.end()) >= 0 ? median : plain_median(magnitudes);
-        const double spread = std::max({plain_median(deviations), options.mad_floor_fraction * typical, 1e-30});
-        const double plain = median + options.firefly_k * 1.4826 * spread;
+        const double floor = std::max(options.mad_floor_fraction * typical, 1e-30),
+                     mad = plain_median(deviations);
+        const auto spread_of = [&](int t) {
+            return scales.empty() ? std::max(mad, floor) : std::max(mad * scale(t), floor);
+        };
         const std::int64_t x = (i % row_samples) / channels;
         const auto excess = [&](int dx, int t) {
             if (x + dx < 0 || x + dx >= width)
@@ -345,6 +391,7 @@ std::int64_t plain_clean_with_neighbours(FrameMatrix& matrix, int width, int cha
         double removed = 0;
         for (int t = 0; t < frames; ++t) {
             double& value = row[static_cast<std::size_t>(t)];
+            const double spread = spread_of(t), plain = median + options.firefly_k * 1.4826 * spread;
             if (!(value > plain))
                 continue;
             const double shared = std::max(
@@ -374,7 +421,9 @@ std::int64_t plain_clean_with_neighbours(FrameMatrix& matrix, int width, int cha
 // pixels dark in most frames, noisy rows whose MAD is above the floor, patches
 // of light that neighbours share in a few frames, fireflies, and NaN/Inf
 // beside fireflies.
-FrameMatrix mixed_image(int width, int height, int frames, std::uint64_t seed)
+// `noisier`: the noise of the last third of the frames is that many times
+// the rest's (a light switched on).
+FrameMatrix mixed_image(int width, int height, int frames, std::uint64_t seed, double noisier = 1)
 {
     constexpr int kChannels = 3;
     FrameMatrix matrix(static_cast<std::int64_t>(width) * height * kChannels, frames);
@@ -396,6 +445,8 @@ FrameMatrix mixed_image(int width, int height, int frames, std::uint64_t seed)
                         value = (t * 7 + x) % 10 < 6 ? 0.0 : 1.0 + 0.5 * uniform(); // dark in most frames
                     else if (kind == 3)
                         value = 1.0 + 2.0 * uniform(); // MAD above the floor
+                    if (3 * t >= 2 * frames && (kind == 0 || kind == 3))
+                        value *= noisier;
                     if ((x / 6 + t) % 9 == 0 && y % 3 != 0)
                         value += 15.0 + uniform(); // light its neighbours share
                     const std::int64_t i = (static_cast<std::int64_t>(y) * width + x) * kChannels + c;
@@ -417,24 +468,31 @@ FrameMatrix mixed_image(int width, int height, int frames, std::uint64_t seed)
 TEST_CASE("row neighbours: the rule written out plainly gives the same bits")
 {
     // 300 pixels: image rows are cleaned in pieces of 128 pixels, each with its neighbours.
-    for (const auto [frames, width, height] : {std::array{7, 40, 12}, std::array{24, 300, 4}}) {
-        FrameMatrix matrix = mixed_image(width, height, frames, 99u + static_cast<std::uint64_t>(frames));
-        FrameMatrix expected = matrix;
-        const std::int64_t expected_fireflies = plain_clean_with_neighbours(expected, width, 3, {});
-        const OutlierCounts counts = clean_outliers(matrix.mutable_view(), {}, nullptr, ImageRowLayout{width, 3});
-        MESSAGE(frames << " frames: " << counts.fireflies << " fireflies, " << counts.non_finite << " NaN/Inf");
-        CHECK(counts.fireflies == expected_fireflies);
-        CHECK(counts.fireflies > 0);
-        CHECK(counts.non_finite > 0);
-        CHECK(std::memcmp(matrix.data.data(), expected.data.data(), sizeof(float) * matrix.data.size()) == 0);
-    }
+    for (const auto [frames, width, height] : {std::array{7, 40, 12}, std::array{24, 300, 4}})
+        for (const bool per_frame : {false, true}) {
+            OutlierOptions options;
+            options.per_frame_noise = per_frame;
+            FrameMatrix matrix =
+                mixed_image(width, height, frames, 99u + static_cast<std::uint64_t>(frames), 4.0);
+            FrameMatrix expected = matrix;
+            const std::int64_t expected_fireflies = plain_clean_with_neighbours(expected, width, 3, options);
+            const OutlierCounts counts =
+                clean_outliers(matrix.mutable_view(), options, nullptr, ImageRowLayout{width, 3});
+            MESSAGE(frames << " frames, per-frame noise " << per_frame << ": " << counts.fireflies
+                           << " fireflies, " << counts.non_finite << " NaN/Inf");
+            CHECK(counts.fireflies == expected_fireflies);
+            CHECK(counts.fireflies > 0);
+            CHECK(counts.non_finite > 0);
+            CHECK(std::memcmp(matrix.data.data(), expected.data.data(), sizeof(float) * matrix.data.size()) ==
+                  0);
+        }
 }
 
 TEST_CASE("row neighbours: bands of whole image rows, cut anywhere, give the bits of the whole image")
 {
     const int width = 300, height = 12, frames = 24;
     const std::int64_t row_samples = width * 3;
-    const FrameMatrix input = mixed_image(width, height, frames, 7);
+    const FrameMatrix input = mixed_image(width, height, frames, 7, 4.0);
     FrameMatrix whole = input;
     clean_outliers(whole.mutable_view(), {}, nullptr, ImageRowLayout{width, 3});
     for (int band_height : {1, 5, 7}) {
@@ -451,4 +509,55 @@ TEST_CASE("row neighbours: bands of whole image rows, cut anywhere, give the bit
         CHECK(std::memcmp(banded.data.data(), whole.data.data(), sizeof(float) * whole.data.size()) == 0);
         CHECK(std::memcmp(marked_again.data.data(), whole.data.data(), sizeof(float) * whole.data.size()) == 0);
     }
+}
+
+TEST_CASE(
+    "per-frame noise: frames 8x as noisy keep their own samples, and the clean frames are not brightened")
+{
+    // Image rows of 1 plus exponential noise (render noise is skewed): of scale
+    // 0.1 in frames 0–15 and 0.8 in frames 16–23 (a large light switched on),
+    // and one firefly. One threshold for all frames, set by the quiet majority,
+    // takes the noisy frames' upper samples for fireflies and spreads their
+    // excess over every frame: the quiet frames come out brighter.
+    constexpr int kWidth = 200, kHeight = 4, kChannels = 3, kFrames = 24, kQuiet = 16;
+    const std::int64_t rows = static_cast<std::int64_t>(kWidth) * kHeight * kChannels;
+    FrameMatrix input(rows, kFrames);
+    std::uint64_t state = 2024;
+    auto uniform = [&] {
+        state = state * 6364136223846793005ull + 1442695040888963407ull;
+        return static_cast<double>(state >> 11) * 0x1.0p-53;
+    };
+    for (std::int64_t i = 0; i < rows; ++i)
+        for (int t = 0; t < kFrames; ++t)
+            input.at(i, t) =
+                static_cast<float>(1.0 - (t < kQuiet ? 0.1 : 0.8) * std::log(std::max(uniform(), 1e-12)));
+    const std::int64_t firefly = 7 * kChannels + 1;
+    input.at(firefly, 20) = 100.0f; // a real one, in a noisy frame
+    const auto quiet_mean = [&](const FrameMatrix& matrix) {
+        double sum = 0;
+        for (std::int64_t i = 0; i < rows; ++i)
+            for (int t = 0; t < kQuiet; ++t)
+                sum += matrix.at(i, t);
+        return sum / static_cast<double>(rows * kQuiet);
+    };
+    const double before = quiet_mean(input);
+
+    FrameMatrix scaled = input, even = input;
+    OutlierOptions per_frame, one_threshold;
+    per_frame.per_frame_noise = true;
+    one_threshold.per_frame_noise = false;
+    const ImageRowLayout layout{kWidth, kChannels};
+    const OutlierCounts scaled_counts = clean_outliers(scaled.mutable_view(), per_frame, nullptr, layout);
+    const OutlierCounts even_counts = clean_outliers(even.mutable_view(), one_threshold, nullptr, layout);
+    MESSAGE("clamped: per frame " << scaled_counts.fireflies << ", one threshold " << even_counts.fireflies
+                                  << "; quiet frames' mean " << before << " -> " << quiet_mean(scaled)
+                                  << " / " << quiet_mean(even));
+    // Judged at its own scale, a frame's exponential tail passes the threshold
+    // in about 0.1 % of the samples; one threshold clamps a tenth of the noisy
+    // frames' samples.
+    CHECK(scaled_counts.fireflies < rows * kFrames / 500);
+    CHECK(scaled.at(firefly, 20) < 20.0f);
+    CHECK(even_counts.fireflies > rows * (kFrames - kQuiet) / 10);
+    CHECK(quiet_mean(scaled) < before * 1.005);
+    CHECK(quiet_mean(even) > before * 1.02);
 }
