@@ -203,28 +203,34 @@ double shared_excess(const GroupScratch& scratch, const GroupShape& shape, std::
     return std::max({left, right, 0.0});
 }
 
+// The samples a frame's scale along an image row is the median of, about.
+constexpr std::int64_t kScaleSamples = 1024;
+
 // Each frame's noise scale along one image row (OutlierOptions::
 // per_frame_noise): the median |x − (left + right)/2| of the row's samples as
-// read in that frame, over the mean of those medians, at least
-// kLeastFrameScale; all 1 where every median is 0. A median, so that the
-// fireflies being judged do not raise it; the whole image row, so that a
-// frame's scale does not hang on the few pixels of one piece.
+// read in that frame (every pixel's, or every step-th's on a long row), over the mean of those medians, at
+// least kLeastFrameScale; all 1 where every median is 0. A median, so that the fireflies being judged do not
+// raise it; the whole image row, so that a frame's scale does not hang on the few pixels of one piece.
 void image_row_frame_scales(const MutableBandView& band, std::int64_t first, const ImageRowLayout& layout,
                             GroupScratch& scratch)
 {
     const int frames = band.frames;
     const std::int64_t c = layout.channels, samples = static_cast<std::int64_t>(layout.width) * c;
+    // Every step-th pixel: about kScaleSamples samples are plenty for a median
+    // (a film frame's row holds 5,760).
+    const std::int64_t step = std::max<std::int64_t>(1, samples / kScaleSamples);
     scratch.scale.assign(static_cast<std::size_t>(frames), 1.0);
     double sum = 0;
     for (int t = 0; t < frames; ++t) {
         scratch.high_pass.clear();
         const float* row = &band.at(first, t);
-        for (std::int64_t i = c; i + c < samples; ++i) {
-            const double d =
-                static_cast<double>(row[i]) - 0.5 * (static_cast<double>(row[i - c]) + row[i + c]);
-            if (std::isfinite(d))
-                scratch.high_pass.push_back(static_cast<float>(std::abs(d)));
-        }
+        for (std::int64_t pixel = 1; pixel + 1 < layout.width; pixel += step)
+            for (std::int64_t i = pixel * c; i < (pixel + 1) * c; ++i) {
+                const double d =
+                    static_cast<double>(row[i]) - 0.5 * (static_cast<double>(row[i - c]) + row[i + c]);
+                if (std::isfinite(d))
+                    scratch.high_pass.push_back(static_cast<float>(std::abs(d)));
+            }
         double median = 0;
         if (!scratch.high_pass.empty()) {
             const auto middle =

@@ -305,7 +305,8 @@ namespace {
 
 // Each frame's noise scale along every image row (OutlierOptions::
 // per_frame_noise) written out plainly: the median |x − (left + right)/2| of
-// the row's finite values as read (the upper middle one, by a full sort), over
+// the row's finite values as read (every step-th pixel's on a row of more than
+// 2 × 1024 samples; the upper middle one, by a full sort), over
 // the mean of the frames' medians, at least kLeastFrameScale; 1 where all are 0.
 std::vector<std::vector<double>> plain_frame_scales(const FrameMatrix& matrix, int width, int channels)
 {
@@ -317,7 +318,11 @@ std::vector<std::vector<double>> plain_frame_scales(const FrameMatrix& matrix, i
         double sum = 0;
         for (int t = 0; t < frames; ++t) {
             std::vector<float> high_pass;
+            const std::int64_t step =
+                std::max<std::int64_t>(1, row_samples / 1024); // outliers.cpp's kScaleSamples
             for (std::int64_t i = channels; i + channels < row_samples; ++i) {
+                if ((i / channels - 1) % step != 0)
+                    continue;
                 const double d = static_cast<double>(matrix.at(first + i, t)) -
                                  0.5 * (static_cast<double>(matrix.at(first + i - channels, t)) +
                                         matrix.at(first + i + channels, t));
@@ -467,8 +472,10 @@ FrameMatrix mixed_image(int width, int height, int frames, std::uint64_t seed, d
 
 TEST_CASE("row neighbours: the rule written out plainly gives the same bits")
 {
-    // 300 pixels: image rows are cleaned in pieces of 128 pixels, each with its neighbours.
-    for (const auto [frames, width, height] : {std::array{7, 40, 12}, std::array{24, 300, 4}})
+    // 300 and 800 pixels: image rows are cleaned in pieces of 128 pixels, each with its
+    // neighbours; 800 pixels are more than 1024 samples: the frame scales read every other pixel.
+    for (const auto [frames, width, height] :
+         {std::array{7, 40, 12}, std::array{24, 300, 4}, std::array{7, 800, 2}})
         for (const bool per_frame : {false, true}) {
             OutlierOptions options;
             options.per_frame_noise = per_frame;
