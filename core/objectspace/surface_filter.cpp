@@ -156,7 +156,7 @@ void SurfaceFilter::frame(int t, const float* noisy, float* values, float* sigma
     tbb::parallel_for(
         tbb::blocked_range<std::int64_t>(0, count), [&](const tbb::blocked_range<std::int64_t>& range) {
             for (std::int64_t p = range.begin(); p != range.end(); ++p) {
-                const std::int64_t* ids = window_neighbours.ids(p);
+                const std::int32_t* ids = window_neighbours.ids(p);
                 const int members = state.window_members[static_cast<std::size_t>(p)];
                 for (std::size_t c = 0; c < ch; ++c) {
                     double value = rebuilt[p * ch + c], kept_noise = state.noise[p * ch + c];

@@ -1,9 +1,13 @@
 // Surface neighbours through a grid of cells (see surface_neighbours.h).
 #include "core/objectspace/surface_neighbours.h"
 
+#include "core/common/error.h"
 #include "core/objectspace/surface_cells.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <limits>
 #include <utility>
 
 namespace modestack::objectspace {
@@ -11,6 +15,9 @@ namespace modestack::objectspace {
 SurfaceNeighbours::SurfaceNeighbours(const SurfaceSamples& samples, double radius, double min_cosine)
 {
     const std::int64_t count = samples.count();
+    if (count > std::numeric_limits<std::int32_t>::max())
+        throw usage_error(fmt::format("object space: {} surface points, more than the {} it can list", count,
+                                      std::numeric_limits<std::int32_t>::max()));
     const SurfaceCells cells(samples, radius, min_cosine);
     std::vector<std::int64_t> sizes(static_cast<std::size_t>(count), 0);
     cells.for_each_point([&](std::int64_t p, const std::vector<SurfaceNeighbour>& neighbours) {
@@ -27,10 +34,10 @@ SurfaceNeighbours::SurfaceNeighbours(const SurfaceSamples& samples, double radiu
         for (std::size_t n = 1; n < neighbours.size(); ++n)
             sorted.emplace_back(neighbours[n].distance_squared, neighbours[n].id);
         std::sort(sorted.begin(), sorted.end());
-        m_ids[m_first[p]] = p, m_distances[m_first[p]] = 0.0f;
+        m_ids[m_first[p]] = static_cast<std::int32_t>(p), m_distances[m_first[p]] = 0.0f;
         for (std::size_t n = 0; n < sorted.size(); ++n) {
             m_distances[m_first[p] + 1 + n] = sorted[n].first;
-            m_ids[m_first[p] + 1 + n] = sorted[n].second;
+            m_ids[m_first[p] + 1 + n] = static_cast<std::int32_t>(sorted[n].second);
         }
     });
 }
@@ -44,7 +51,7 @@ double SurfaceNeighbours::mean_size() const
 std::int64_t SurfaceNeighbours::bytes() const
 {
     return static_cast<std::int64_t>(m_first.size() * sizeof(std::int64_t) +
-                                     m_ids.size() * sizeof(std::int64_t) +
+                                     m_ids.size() * sizeof(std::int32_t) +
                                      m_distances.size() * sizeof(float));
 }
 

@@ -16,11 +16,15 @@ namespace modestack::objectspace {
 class SurfaceNeighbours {
 public:
     /// `radius` in metres; `min_cosine`: smallest dot product of the two normals.
+    /// Throws a usage error for more points than a 32-bit id holds.
     SurfaceNeighbours(const SurfaceSamples& samples, double radius, double min_cosine);
     /// Points (as many as the samples had).
     std::int64_t count() const { return static_cast<std::int64_t>(m_first.size()) - 1; }
     /// Neighbours of point p (itself included) and their squared distances.
-    const std::int64_t* ids(std::int64_t p) const { return m_ids.data() + m_first[p]; }
+    /// 32-bit ids: a film frame has a few million points, and the lists are
+    /// most of object space's memory besides the rebuild (a third less than
+    /// 64-bit ids).
+    const std::int32_t* ids(std::int64_t p) const { return m_ids.data() + m_first[p]; }
     const float* distances_squared(std::int64_t p) const { return m_distances.data() + m_first[p]; }
     std::int64_t size(std::int64_t p) const { return m_first[p + 1] - m_first[p]; }
     double mean_size() const;
@@ -33,7 +37,7 @@ public:
 
 private:
     std::vector<std::int64_t> m_first; // CSR offsets, count + 1
-    std::vector<std::int64_t> m_ids;
+    std::vector<std::int32_t> m_ids;
     std::vector<float> m_distances;
 };
 

@@ -29,7 +29,7 @@ std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours,
         tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, count),
                           [&](const tbb::blocked_range<std::int64_t>& range) {
                               for (std::int64_t p = range.begin(); p != range.end(); ++p) {
-                                  const std::int64_t* ids = neighbours.ids(p);
+                                  const std::int32_t* ids = neighbours.ids(p);
                                   const int others = members[p] - 1;
                                   for (std::size_t c = 0; c < ch; ++c) {
                                       double around = 0;
@@ -50,7 +50,7 @@ std::vector<double> surface_noise_variance(const SurfaceNeighbours& neighbours,
     const double degrees = std::max(1, frame_count - kept_modes);
     tbb::parallel_for(tbb::blocked_range<std::int64_t>(0, count), [&](const tbb::blocked_range<std::int64_t>& range) {
         for (std::int64_t p = range.begin(); p != range.end(); ++p) {
-            const std::int64_t* ids = neighbours.ids(p);
+            const std::int32_t* ids = neighbours.ids(p);
             for (std::size_t c = 0; c < ch; ++c) {
                 double sum = 0;
                 for (int n = 0; n < members[p]; ++n)
