@@ -620,21 +620,32 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 return gain > 0 && gain * gain * window > z_squared * std::max(square - mean * mean, 0.0);
             };
             // The rebuild unless others beat it by z standard errors over the
-            // window; of those, the one with the least SURE over the 3×3 pixels
-            // around (the wide window has the samples for the test, the narrow one
-            // sees a blur's bias at an edge that the wide one averages away).
-            // Not the input as the null: heavy-tailed noise makes the rebuild's
-            // evidence against a firefly-ridden input weak, and taking the input
-            // there cost the indirect light 10× (bench/results/estimators.md).
+            // window. Of the blurs that do, the one with the larger gain over
+            // the window: their risks are close, and the least SURE over nine
+            // pixels picked between them by chance (on a fixed-seed shot's
+            // indirect light, 2.4× the error of the wider blur alone). Then the
+            // input, if it passed, where its SURE over the 3×3 pixels around is
+            // lower than that blur's: the narrow window sees a blur's bias at an
+            // edge that the wide one averages away (bench/results/estimators.md,
+            // section 25). Not the input as the null: heavy-tailed noise makes
+            // the rebuild's evidence against a firefly-ridden input weak, and
+            // taking the input there cost the indirect light 10×.
             int chosen = 0;
-            double least = 0;
+            double largest = 0;
+            bool input_passed = false;
             for (int k = 1; k < kEstimators; ++k) {
                 if (!used[k])
                     continue;
-                const double mean = gain_mean[k][x], local = near_sure[k][x];
-                if (significant(mean, mean, gain_square_mean[k][x]) && (chosen == 0 || local < least))
-                    chosen = k, least = local;
+                const double mean = gain_mean[k][x];
+                if (!significant(mean, mean, gain_square_mean[k][x]))
+                    continue;
+                if (k == static_cast<int>(Estimator::Input))
+                    input_passed = true;
+                else if (chosen == 0 || mean > largest)
+                    chosen = k, largest = mean;
             }
+            if (input_passed && (chosen == 0 || near_sure[1][x] < near_sure[chosen][x]))
+                chosen = static_cast<int>(Estimator::Input);
             // The rebuild: by a candidate's gain, by the one-sided test, or by the per-pixel test.
             bool rejected = chosen != 0;
             if (chosen == 0 && below_test) {
@@ -643,10 +654,12 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 const double excess = below_row[x] + kBelowMean * scale;
                 rejected = excess < 0 && excess * excess * near > below_limit * scale * scale;
             }
-            if (rejected && chosen == 0) // the candidate with the least SURE over the 3×3 pixels around
+            if (rejected && chosen == 0) { // the candidate with the least SURE over the 3×3 pixels around
+                double least = 0;
                 for (int k = 1; k < kEstimators; ++k)
                     if (used[k] && (chosen == 0 || near_sure[k][x] < least))
                         chosen = k, least = near_sure[k][x];
+            }
             // The input steady in time where the value taken, the rebuild or a
             // blur, is far from it: the input is taken (its risk is that small
             // spread; a blur's SURE at a bright edge can fall far below its true

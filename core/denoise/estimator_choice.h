@@ -29,8 +29,10 @@
 // a strong denoiser is a small difference of two large noisy numbers; an argmin
 // would pick by chance wherever risks are close (measured in
 // bench/results/estimators.md: it made the indirect light 2–3× worse). Of the
-// estimators that pass, the one with the least SURE over the 3×3 pixels around
-// is taken (the narrow window sees a blur's bias at an edge).
+// blurs that pass, the one with the larger pooled gain is taken (their risks
+// are close: the 3×3 SURE picked between them by chance); the input, if it
+// passes, takes its place where its SURE over the 3×3 pixels around is lower
+// (the narrow window sees a blur's bias at an edge).
 // The window test cannot see a failure of a few pixels: a gain carried by k
 // pixels of the window scores about √k standard errors, whatever its size (a
 // firefly is such a gain too). One kind of narrow failure can be told from
