@@ -65,7 +65,8 @@ void add_method_options(CLI::App& command, MethodOptions& options)
         "value taken (the rebuild or a blur) is far from it (then the input is taken); noise found to repeat "
         "from frame to frame (a "
         "fixed seed: warned of) counts in every candidate's risk and in the mode filter's noise levels "
-        "where it is as white as render noise (indirect light); sigma is the "
+        "where it is as white as render noise (indirect light), and there the rebuild must beat the input "
+        "by the same test or the input is taken; sigma is the "
         "chosen value's estimated error. Default auto: rebuild,input,spatial,nlmeans, but the rebuild alone "
         "with --rank-map (its map is of the rebuild) and --object-space (no image neighbours)");
 }

@@ -151,6 +151,10 @@ struct ChoiceFrame {
     /// and the residual's v cannot see it: the choice adds share × the windowed
     /// power of the input's own high-pass to every candidate's noise variance.
     double repeating_share = 0;
+    /// Whether the noise was found to repeat at all (counted or not): the
+    /// rebuild can then remove only the part that is new in each frame, and
+    /// where it does not beat the input by the window test the input is taken.
+    bool noise_repeats = false;
     /// Per pixel of rows from spread_begin (covering the rows chosen): the
     /// input's spreads around this frame and their numbers of terms, as
     /// spread_rows lays them out (temporal_spread.h). Null, or no input among
