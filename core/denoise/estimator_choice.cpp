@@ -630,6 +630,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             // section 25). Not the input as the null: heavy-tailed noise makes
             // the rebuild's evidence against a firefly-ridden input weak, and
             // taking the input there cost the indirect light 10×.
+            constexpr int input_estimator = static_cast<int>(Estimator::Input);
             int chosen = 0;
             double largest = 0;
             bool input_passed = false;
@@ -639,20 +640,21 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 const double mean = gain_mean[k][x];
                 if (!significant(mean, mean, gain_square_mean[k][x]))
                     continue;
-                if (k == static_cast<int>(Estimator::Input))
+                if (k == input_estimator)
                     input_passed = true;
                 else if (chosen == 0 || mean > largest)
                     chosen = k, largest = mean;
             }
-            if (input_passed && (chosen == 0 || near_sure[1][x] < near_sure[chosen][x]))
-                chosen = static_cast<int>(Estimator::Input);
+            if (input_passed && (chosen == 0 || near_sure[input_estimator][x] < near_sure[chosen][x]))
+                chosen = input_estimator;
             // Noise that repeats: the rebuild keeps that part, so its gain over
             // the input is at most the new part's; it must show it (the input is
             // the null there; on a fixed-seed shot's direct light the rebuild
             // kept where it could not was above the input in 44 % of its frames).
-            if (chosen == 0 && frame.noise_repeats && used[1] &&
-                !significant(-gain_mean[1][x], -gain_mean[1][x], gain_square_mean[1][x]))
-                chosen = static_cast<int>(Estimator::Input);
+            if (chosen == 0 && frame.noise_repeats && used[input_estimator] &&
+                !significant(-gain_mean[input_estimator][x], -gain_mean[input_estimator][x],
+                             gain_square_mean[input_estimator][x]))
+                chosen = input_estimator;
             // The rebuild: by a candidate's gain, by the one-sided test, or by the per-pixel test.
             bool rejected = chosen != 0;
             if (chosen == 0 && below_test) {
