@@ -279,6 +279,7 @@ struct Workspace {
     std::array<Plane, kEstimators> sure, sure_squared, difference, difference_squared;
     std::array<Plane, kEstimators> sure_mean, sure_square_mean, difference_mean, difference_square_mean,
         local_sure;
+    Plane uncounted; // sigma's part of noise that repeats where the risks do not count it
     std::vector<float> scratch, blur_sums;
     std::vector<double> column;
     // The non-local means around the pixels it may take: those pixels (`biased`),
@@ -458,6 +459,16 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     // noise is v plus that.
     const bool repeating = frame.repeating_share > 0;
     const Plane& total = repeating ? work.total_variance : variance;
+    // Noise that repeats where the risks do not count it: sigma still does
+    // (every candidate carries it), the same share of the input's power.
+    const bool uncounted = frame.uncounted_share > 0 && !repeating;
+    if (uncounted) {
+        work.uncounted.reset(window_begin, window_end, width, channels);
+        for (int y = window_begin; y < window_end; ++y)
+            for (std::int64_t i = 0; i < row_samples; ++i)
+                work.uncounted.row(y)[i] =
+                    static_cast<float>(frame.uncounted_share * work.input_power.row(y)[i]);
+    }
     if (repeating) {
         work.total_variance.reset(window_begin, window_end, width, channels);
         for (int y = window_begin; y < window_end; ++y)
@@ -599,6 +610,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             }
         const float *pooled_sure = sure_mean[0].row(y), *variance_row = total.row(y);
         const float* repeating_row = repeating ? repeating_part.row(y) : nullptr;
+        const float* uncounted_row = uncounted ? work.uncounted.row(y) : nullptr;
         const float* engine_sigma = frame.sigma + (y - frame.rebuilt_begin) * row_samples;
         const float* below_row = below_test ? work.below_mean.row(y) : nullptr;
         const float* scale_row = below_test ? work.noise_scale_mean.row(y) : nullptr;
@@ -721,9 +733,11 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
                 const double v = variance_row[i];
                 const double engine = engine_sigma[i];
-                floor[c] = chosen == 0   ? engine * engine + (repeating ? repeating_row[i] : 0.0)
-                           : chosen == 1 ? v
-                                         : v * kernel_x[chosen - 2].squares[x] * kernel_y_squares[chosen - 2];
+                const double unseen = uncounted ? uncounted_row[i] : 0.0; // repeating, not in the risks
+                floor[c] = chosen == 0   ? engine * engine + (repeating ? repeating_row[i] : 0.0) + unseen
+                           : chosen == 1 ? v + unseen
+                                         : (v + unseen) * kernel_x[chosen - 2].squares[x] *
+                                               kernel_y_squares[chosen - 2];
                 floor_sum += floor[c];
             }
             const double floor_mean = floor_sum * per_channel;

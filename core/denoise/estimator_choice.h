@@ -155,6 +155,10 @@ struct ChoiceFrame {
     /// rebuild can then remove only the part that is new in each frame, and
     /// where it does not beat the input by the window test the input is taken.
     bool noise_repeats = false;
+    /// The share of the input's noise that repeats but is not counted in the
+    /// risks (RepeatingNoise::uncounted_share): sigma adds that share of the
+    /// input's windowed high-pass power to the chosen value's noise.
+    double uncounted_share = 0;
     /// Per pixel of rows from spread_begin (covering the rows chosen): the
     /// input's spreads around this frame and their numbers of terms, as
     /// spread_rows lays them out (temporal_spread.h). Null, or no input among

@@ -58,6 +58,10 @@ struct RepeatingNoise {
     bool counted() const;
     /// The share the estimator choice counts: share where counted(), else 0.
     double counted_share() const { return counted() ? share : 0.0; }
+    /// The share that repeats where the choice's risks do not count it (not
+    /// white enough: mostly edges): sigma still counts it, since the rebuild,
+    /// the input and the blurs all carry it.
+    double uncounted_share() const { return repeats && !counted() ? share : 0.0; }
 };
 
 /// The least relative pixel-scale variation that is said to be noise: 0.1 %

@@ -295,6 +295,7 @@ struct WallFrame {
     double noise_factor = 1;
     double repeating_share = 0; // of the noise, repeating from frame to frame (repeating_noise.h)
     bool noise_repeats = false; // found to repeat, whether counted or not
+    double uncounted_share = 0; // repeating where the risks do not count it (sigma does)
     std::vector<float> spread, spread_terms; // the per-pixel test's, when set
     std::vector<float> misfit;               // the residual's statistics in time, when set
     WallFrame(float noise, unsigned seed, float shot_noise = 0)
@@ -325,6 +326,7 @@ struct WallFrame {
         frame.noise_factor = noise_factor;
         frame.repeating_share = repeating_share;
         frame.noise_repeats = noise_repeats;
+        frame.uncounted_share = uncounted_share;
         frame.rebuilt_begin = 0, frame.rebuilt_end = height;
         if (!spread.empty())
             frame.spread = spread.data(), frame.spread_terms = spread_terms.data(), frame.spread_begin = 0;
@@ -811,4 +813,28 @@ TEST_CASE("estimators: where noise repeats, a rebuild no better than the input m
     CHECK(mean_square(unaware) > input_error); // the rebuild kept where it could not be rejected
     CHECK(mean_square(aware) < 1.01 * input_error);
     CHECK(inputs > std::ptrdiff_t(choice.size() * 9 / 10));
+}
+
+TEST_CASE("estimators: noise that repeats where the risks do not count it is still in sigma")
+{
+    // The rebuild keeps the frame's noise whole, and the noise is found to
+    // repeat but not counted (on direct light its high-pass is mostly edges):
+    // whatever is taken carries that noise, and sigma must say so.
+    WallFrame wall(0.05f, 19);
+    wall.rebuilt = wall.input;
+    wall.noise_repeats = true;
+    std::vector<float> values, blind_sigma, sigma;
+    wall.choose(true, &values, "rebuild,input,spatial", &blind_sigma);
+    wall.uncounted_share = 1;
+    wall.choose(true, &values, "rebuild,input,spatial", &sigma);
+    double error = 0, blind = 0, counted = 0;
+    for (size_t i = 0; i < values.size(); ++i) {
+        error += (values[i] - 0.5) * (values[i] - 0.5);
+        blind += double(blind_sigma[i]) * blind_sigma[i], counted += double(sigma[i]) * sigma[i];
+    }
+    MESSAGE("RMS(error) / RMS(sigma): " << std::sqrt(error / blind) << " without the share, "
+                                        << std::sqrt(error / counted) << " with it");
+    CHECK(std::sqrt(error / blind) > 3); // the rebuild's own sigma: far too small
+    CHECK(std::sqrt(error / counted) > 0.7);
+    CHECK(std::sqrt(error / counted) < 1.4);
 }
