@@ -279,7 +279,6 @@ struct Workspace {
     std::array<Plane, kEstimators> sure, sure_squared, difference, difference_squared;
     std::array<Plane, kEstimators> sure_mean, sure_square_mean, difference_mean, difference_square_mean,
         local_sure;
-    Plane uncounted; // sigma's part of noise that repeats where the risks do not count it
     std::vector<float> scratch, blur_sums;
     std::vector<double> column;
     // The non-local means around the pixels it may take: those pixels (`biased`),
@@ -460,15 +459,9 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
     const bool repeating = frame.repeating_share > 0;
     const Plane& total = repeating ? work.total_variance : variance;
     // Noise that repeats where the risks do not count it: sigma still does
-    // (every candidate carries it), the same share of the input's power.
+    // (every candidate carries it), the same share of the input's power (left
+    // as it is: it becomes the counted part only where the risks count one).
     const bool uncounted = frame.uncounted_share > 0 && !repeating;
-    if (uncounted) {
-        work.uncounted.reset(window_begin, window_end, width, channels);
-        for (int y = window_begin; y < window_end; ++y)
-            for (std::int64_t i = 0; i < row_samples; ++i)
-                work.uncounted.row(y)[i] =
-                    static_cast<float>(frame.uncounted_share * work.input_power.row(y)[i]);
-    }
     if (repeating) {
         work.total_variance.reset(window_begin, window_end, width, channels);
         for (int y = window_begin; y < window_end; ++y)
@@ -610,7 +603,7 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
             }
         const float *pooled_sure = sure_mean[0].row(y), *variance_row = total.row(y);
         const float* repeating_row = repeating ? repeating_part.row(y) : nullptr;
-        const float* uncounted_row = uncounted ? work.uncounted.row(y) : nullptr;
+        const float* uncounted_power = uncounted ? work.input_power.row(y) : nullptr;
         const float* engine_sigma = frame.sigma + (y - frame.rebuilt_begin) * row_samples;
         const float* below_row = below_test ? work.below_mean.row(y) : nullptr;
         const float* scale_row = below_test ? work.noise_scale_mean.row(y) : nullptr;
@@ -733,7 +726,8 @@ MODESTACK_AVX2_CLONES ChoiceCounts choose_strip(const EstimatorOptions& options,
                 const std::int64_t i = static_cast<std::int64_t>(x) * channels + c;
                 const double v = variance_row[i];
                 const double engine = engine_sigma[i];
-                const double unseen = uncounted ? uncounted_row[i] : 0.0; // repeating, not in the risks
+                const double unseen = // repeating, not in the risks
+                    uncounted ? static_cast<float>(frame.uncounted_share * uncounted_power[i]) : 0.0;
                 floor[c] = chosen == 0   ? engine * engine + (repeating ? repeating_row[i] : 0.0) + unseen
                            : chosen == 1 ? v + unseen
                                          : (v + unseen) * kernel_x[chosen - 2].squares[x] *

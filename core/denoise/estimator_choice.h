@@ -84,6 +84,7 @@
 // pooled SURE's noise, and the gate left the blurs' sigma short).
 #pragma once
 
+#include "core/denoise/repeating_noise.h"
 #include "core/lowrank/confidence.h"
 
 #include <array>
@@ -174,6 +175,14 @@ struct ChoiceFrame {
     int misfit_begin = 0;
     double leverage = 0;
     int rebuilt_begin = 0, rebuilt_end = 0;
+
+    /// repeating_share, noise_repeats and uncounted_share, from the shot's repeating noise.
+    void count_repeating(const RepeatingNoise& noise)
+    {
+        repeating_share = noise.counted_share();
+        noise_repeats = noise.repeats;
+        uncounted_share = noise.uncounted_share();
+    }
 };
 
 /// How many pixels of a frame each estimator won, and the sum of its estimated

@@ -388,9 +388,7 @@ Report write_task(const PassContext& context, const SolvedSums& solved, const Su
             frame.kept_noise = shot.gain_modes > 0 ? buffers.kept_gain.data() : nullptr;
             frame.noise_scale = noise_scale.data();
             frame.noise_factor = frame_noise_factor(modes, solved.frame_noise_factors, t);
-            frame.repeating_share = plan.repeating.counted_share();
-            frame.noise_repeats = plan.repeating.repeats;
-            frame.uncounted_share = plan.repeating.uncounted_share();
+            frame.count_repeating(plan.repeating);
             if (reach > 0) { // the per-pixel test's spread, as a whole run makes it
                 SpreadWindow window;
                 window.image = image, window.rows_begin = 0;

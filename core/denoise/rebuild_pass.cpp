@@ -218,9 +218,7 @@ void RebuildPass::add_rows(int row, int end)
         choice_frame.kept_noise = filter ? kept_noise.data() : nullptr;
         choice_frame.noise_scale = m_noise_scale.data();
         choice_frame.noise_factor = frame_noise_factor(modes, report.frame_noise_factors, frame);
-        choice_frame.repeating_share = m_plan.repeating.counted_share();
-        choice_frame.noise_repeats = m_plan.repeating.repeats;
-        choice_frame.uncounted_share = m_plan.repeating.uncounted_share();
+        choice_frame.count_repeating(m_plan.repeating);
         Chosen& chosen = m_chosen_of_worker.local();
         if (spread) { // the per-pixel test's spread and the misfit's statistics, from the band's rows
             SpreadWindow window;

@@ -70,6 +70,15 @@ void misfit_rows(const MisfitWindow& window, int row, int end, float* misfit)
     std::vector<double> residuals(static_cast<std::size_t>(2 * judged + 1) * width);
     std::vector<double> means(static_cast<std::size_t>(width));
     std::vector<double> squares(static_cast<std::size_t>(width) * side_frames);
+    // Per side, the frames of the window that are in the shot.
+    std::array<std::array<int, side_frames>, 2> present{};
+    std::array<int, 2> present_count{};
+    for (int side = 0; side < 2; ++side)
+        for (int k = side == 0 ? 0 : judged; k <= (side == 0 ? judged : 2 * judged); ++k)
+            if (window.input[static_cast<size_t>(k)] != nullptr &&
+                window.rebuilt[static_cast<size_t>(k)] != nullptr)
+                present[static_cast<size_t>(side)]
+                       [static_cast<size_t>(present_count[static_cast<size_t>(side)]++)] = k;
     for (int y = row; y < end; ++y) {
         const std::int64_t offset = (y - window.rows_begin) * row_samples;
         for (int k = 0; k <= 2 * judged; ++k) {
@@ -88,22 +97,17 @@ void misfit_rows(const MisfitWindow& window, int row, int end, float* misfit)
             }
         }
         for (int side = 0; side < 2; ++side) {
-            const int first = side == 0 ? 0 : judged, last = side == 0 ? judged : 2 * judged;
-            std::array<int, side_frames> present{};
-            int n = 0;
-            for (int k = first; k <= last; ++k)
-                if (window.input[static_cast<size_t>(k)] != nullptr &&
-                    window.rebuilt[static_cast<size_t>(k)] != nullptr)
-                    present[static_cast<size_t>(n++)] = k;
+            const std::array<int, side_frames>& frames = present[static_cast<size_t>(side)];
+            const int n = present_count[static_cast<size_t>(side)];
             for (int x = 0; x < width; ++x) {
                 double mean = 0;
                 for (int i = 0; i < n; ++i)
-                    mean += residuals[static_cast<std::size_t>(present[static_cast<size_t>(i)]) * width + x];
+                    mean += residuals[static_cast<std::size_t>(frames[static_cast<size_t>(i)]) * width + x];
                 mean = n > 0 ? mean / n : 0.0;
                 means[static_cast<std::size_t>(x)] = mean;
                 for (int i = 0; i < n; ++i) {
                     const double deviation =
-                        residuals[static_cast<std::size_t>(present[static_cast<size_t>(i)]) * width + x] -
+                        residuals[static_cast<std::size_t>(frames[static_cast<size_t>(i)]) * width + x] -
                         mean;
                     squares[static_cast<std::size_t>(x) * side_frames + i] = deviation * deviation;
                 }

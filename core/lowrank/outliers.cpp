@@ -250,15 +250,22 @@ void image_row_frame_scales(const MutableBandView& band, std::int64_t first, con
         scale = std::max(scale / mean, kLeastFrameScale);
 }
 
+// The plain threshold's spread in frame t: the row's, at the frame's noise
+// scale where there are scales.
+double frame_spread(const RowStats& stats, const GroupScratch& scratch, int t)
+{
+    if (scratch.scale.empty())
+        return stats.spread;
+    return std::max(stats.spread * scratch.scale[static_cast<std::size_t>(t)], stats.floor);
+}
+
 // The plain threshold of frame t, at its noise scale where there are scales.
 double frame_threshold(const RowStats& stats, const OutlierOptions& options, const GroupScratch& scratch,
                        int t)
 {
     if (scratch.scale.empty())
         return stats.threshold;
-    return stats.median +
-           options.firefly_k * 1.4826 *
-               std::max(stats.spread * scratch.scale[static_cast<std::size_t>(t)], stats.floor);
+    return stats.median + options.firefly_k * 1.4826 * frame_spread(stats, scratch, t);
 }
 
 // The threshold of sample t of a row with a plain threshold, lifted by the light
@@ -271,11 +278,8 @@ double lifted_threshold(const RowStats& stats, const OutlierOptions& options, co
         return frame_threshold(stats, options, scratch, t);
     const double expected = stats.median + shared;
     const double level = stats.typical > 0 && expected > stats.typical ? expected / stats.typical : 1.0;
-    const double row_spread =
-        scratch.scale.empty()
-            ? stats.spread
-            : std::max(stats.spread * scratch.scale[static_cast<std::size_t>(t)], stats.floor);
-    const double spread = std::max(row_spread * level, options.mad_floor_fraction * std::abs(expected));
+    const double spread =
+        std::max(frame_spread(stats, scratch, t) * level, options.mad_floor_fraction * std::abs(expected));
     return expected + options.firefly_k * 1.4826 * spread;
 }
 
